@@ -1,0 +1,137 @@
+//! Sensor messages: what the autonomy receives from the (simulated or real) platform.
+//!
+//! Exteroceptive data is expressed in the rover body frame at the time of capture; the autonomy
+//! places it in the world with its own pose estimate, never with ground truth.
+
+/// Which camera pair (or range sensor) produced a point cloud.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CameraKind {
+    /// Stereo pair on the pan/tilt mast.
+    Mast,
+    /// Forward body stereo pair.
+    BodyFront,
+    /// Rear body stereo pair.
+    BodyRear,
+    /// Nodding LIDAR (MRPTA).
+    Lidar,
+}
+
+impl CameraKind {
+    /// A stable lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CameraKind::Mast => "mast",
+            CameraKind::BodyFront => "body_front",
+            CameraKind::BodyRear => "body_rear",
+            CameraKind::Lidar => "lidar",
+        }
+    }
+}
+
+/// The visible region of one range image: a wedge in the body frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wedge {
+    /// Bearing of the wedge centre in the body frame (rad, counter-clockwise from forward).
+    pub bearing: f64,
+    /// Half of the field of view (rad).
+    pub half_angle: f64,
+    /// Nearest range sensed (m).
+    pub min_range: f64,
+    /// Useful far range (m).
+    pub max_range: f64,
+}
+
+impl Wedge {
+    /// Whether a body-frame planar point lies inside the wedge.
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let r = x.hypot(y);
+        if r < self.min_range || r > self.max_range {
+            return false;
+        }
+        crate::angle_diff(y.atan2(x), self.bearing).abs() <= self.half_angle
+    }
+}
+
+/// A cloud of 3D points from one range image, in the body frame at capture time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointCloud {
+    /// Sensor that produced it.
+    pub camera: CameraKind,
+    /// Sensor origin in the body frame (m).
+    pub origin: [f64; 3],
+    /// The region it covers (planar, body frame).
+    pub wedge: Wedge,
+    /// Points (x forward, y left, z up) in metres, body frame.
+    pub points: Vec<[f32; 3]>,
+}
+
+/// The ten forward proximity threshold sensors of SR2 (paper 001), grouped in clusters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ProximityReading {
+    /// Raw sensors, index 0 leftmost; true when something is closer than the threshold.
+    pub raw: [bool; 10],
+}
+
+impl ProximityReading {
+    /// Any of the left cluster (sensors 0..3) triggered.
+    pub fn left(&self) -> bool {
+        self.raw[0..3].iter().any(|&b| b)
+    }
+    /// Any of the middle cluster (sensors 3..7) triggered.
+    pub fn middle(&self) -> bool {
+        self.raw[3..7].iter().any(|&b| b)
+    }
+    /// Any of the right cluster (sensors 7..10) triggered.
+    pub fn right(&self) -> bool {
+        self.raw[7..10].iter().any(|&b| b)
+    }
+    /// Any sensor triggered.
+    pub fn any(&self) -> bool {
+        self.raw.iter().any(|&b| b)
+    }
+}
+
+/// Inertial and attitude sensors sampled together.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImuSample {
+    /// Time (s).
+    pub t: f64,
+    /// Yaw rate from the gyro (rad/s), including bias and noise.
+    pub gyro_z: f64,
+    /// Roll from the inclinometer (rad).
+    pub incl_roll: f64,
+    /// Pitch from the inclinometer (rad).
+    pub incl_pitch: f64,
+    /// Magnetic/compass heading (rad, counter-clockwise from east); NaN on a faulty sensor.
+    pub compass_yaw: f64,
+    /// Heading from the sun sensor (rad), when the sun is visible.
+    pub sun_yaw: Option<f64>,
+}
+
+/// Cumulative wheel encoder counts.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OdometrySample {
+    /// Time (s).
+    pub t: f64,
+    /// Left side cumulative counts.
+    pub left_counts: i64,
+    /// Right side cumulative counts.
+    pub right_counts: i64,
+}
+
+/// Everything the platform reports after executing one command.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SensorFrame {
+    /// Time at the end of the command (s).
+    pub t: f64,
+    /// Range data requested by the command (empty for motion).
+    pub clouds: Vec<PointCloud>,
+    /// Proprioceptive samples during the command, in time order.
+    pub imu: Vec<ImuSample>,
+    /// Encoder samples during the command, in time order.
+    pub odometry: Vec<OdometrySample>,
+    /// Proximity reading at the end of the command.
+    pub proximity: ProximityReading,
+    /// Whether a motion stopped early (guard, hazard or stall), and why.
+    pub motion_stopped: Option<String>,
+}

@@ -1,0 +1,1 @@
+//! rovernav executive layer.

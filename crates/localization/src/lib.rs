@@ -1,0 +1,1 @@
+//! rovernav localization layer.

@@ -1,0 +1,1 @@
+//! rovernav mapping layer.

@@ -1,0 +1,1 @@
+//! rovernav navigation layer.

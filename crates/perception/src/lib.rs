@@ -1,0 +1,1 @@
+//! rovernav perception layer.

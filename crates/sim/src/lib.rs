@@ -1,0 +1,1 @@
+//! rovernav sim layer.

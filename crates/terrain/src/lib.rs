@@ -1,0 +1,1 @@
+//! rovernav terrain layer.
