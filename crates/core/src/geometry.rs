@@ -25,10 +25,12 @@ impl Point2 {
         self.x.hypot(self.y)
     }
     /// Vector difference `self - o`.
+    #[allow(clippy::should_implement_trait)]
     pub fn sub(self, o: Point2) -> Point2 {
         Point2::new(self.x - o.x, self.y - o.y)
     }
     /// Vector sum.
+    #[allow(clippy::should_implement_trait)]
     pub fn add(self, o: Point2) -> Point2 {
         Point2::new(self.x + o.x, self.y + o.y)
     }
@@ -194,10 +196,7 @@ mod tests {
 
     #[test]
     fn positive_pitch_lowers_the_nose() {
-        let pose = Pose3 {
-            pitch: 0.3,
-            ..Default::default()
-        };
+        let pose = Pose3 { pitch: 0.3, ..Default::default() };
         assert!(pose.transform([1.0, 0.0, 0.0])[2] < 0.0);
     }
 

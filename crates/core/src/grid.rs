@@ -74,10 +74,7 @@ pub struct Grid2<T> {
 impl<T: Clone> Grid2<T> {
     /// A grid filled with one value.
     pub fn filled(geometry: GridGeometry, value: T) -> Self {
-        Self {
-            data: vec![value; geometry.len()],
-            geometry,
-        }
+        Self { data: vec![value; geometry.len()], geometry }
     }
 }
 
@@ -104,11 +101,7 @@ impl<T> Grid2<T> {
     }
     /// The value at (col, row) if inside.
     pub fn try_get(&self, col: isize, row: isize) -> Option<&T> {
-        if col < 0
-            || row < 0
-            || col as usize >= self.geometry.cols
-            || row as usize >= self.geometry.rows
-        {
+        if col < 0 || row < 0 || col as usize >= self.geometry.cols || row as usize >= self.geometry.rows {
             None
         } else {
             Some(&self.data[row as usize * self.geometry.cols + col as usize])
@@ -126,13 +119,7 @@ mod tests {
 
     #[test]
     fn cell_of_and_center_round_trip() {
-        let g = GridGeometry {
-            cols: 10,
-            rows: 5,
-            resolution: 0.5,
-            origin_x: -2.0,
-            origin_y: 1.0,
-        };
+        let g = GridGeometry { cols: 10, rows: 5, resolution: 0.5, origin_x: -2.0, origin_y: 1.0 };
         for r in 0..5 {
             for c in 0..10 {
                 let (x, y) = g.center(c, r);

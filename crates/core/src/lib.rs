@@ -18,9 +18,7 @@ pub use nav::{
     OverlayKind, PoseEstimate, SenseRequest,
 };
 pub use rover::RoverConfig;
-pub use sensors::{
-    CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, SensorFrame, Wedge,
-};
+pub use sensors::{CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, SensorFrame, Wedge};
 
 /// The folder holding rovernav's real data sets (`ROVERNAV_DATA`, default `../shared/data`).
 ///

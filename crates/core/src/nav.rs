@@ -34,15 +34,9 @@ impl Outcome {
     }
     /// Parses the stable name.
     pub fn parse(s: &str) -> Option<Self> {
-        [
-            Self::Reached,
-            Self::Unreachable,
-            Self::HelpRequested,
-            Self::Aborted,
-            Self::Timeout,
-        ]
-        .into_iter()
-        .find(|o| o.as_str() == s)
+        [Self::Reached, Self::Unreachable, Self::HelpRequested, Self::Aborted, Self::Timeout]
+            .into_iter()
+            .find(|o| o.as_str() == s)
     }
 }
 

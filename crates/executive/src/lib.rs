@@ -1,1 +1,18 @@
-//! rovernav executive layer.
+//! The executive: missions, the navigation loop that ties the autonomy to the platform, and the
+//! run report.
+//!
+//! The loop is the deliberative layer's simplest form (paper 004 section 2): it builds the world
+//! the mission names, starts the chosen navigator and localiser, and relays commands and sensor
+//! frames between them and the platform until the navigator finishes or a limit is hit. The
+//! autonomy only ever sees `SensorFrame`s; ground truth stays inside the simulator and is used
+//! here solely to score the run.
+
+pub mod mission;
+pub mod report;
+pub mod run;
+pub mod world;
+
+pub use mission::{Mission, MissionError};
+pub use report::Report;
+pub use run::{Progress, RunError, RunOutput, RunSettings, Trace, run_mission, run_world};
+pub use world::{World, WorldError, build_world};

@@ -1,1 +1,34 @@
-//! rovernav navigation layer.
+//! Navigators: complete sense-plan-act algorithms behind the `Navigator` trait, chosen by name in
+//! the mission file (as Nav2 chooses planner plugins).
+//!
+//! Each navigator composes the perception, mapping, planning and localisation layers; it sees
+//! only the `NavInput` the executive gives it (pose estimate and sensor frames), never ground
+//! truth. A new navigator is one module plus one line in [`navigator_by_name`].
+
+pub mod grid_nav;
+pub mod terrain_model;
+
+pub use grid_nav::{GridNavigator, GridNavigatorConfig};
+pub use terrain_model::TerrainModel;
+
+use rovernav_core::{Navigator, RoverConfig};
+
+/// Registered navigator names.
+pub const NAVIGATOR_NAMES: [&str; 2] = ["astar-grid", "mrpta"];
+
+/// A fresh navigator by registry name, or `None` if the name is unknown.
+pub fn navigator_by_name(name: &str, rover: &RoverConfig) -> Option<Box<dyn Navigator>> {
+    match name {
+        "astar-grid" => Some(Box::new(GridNavigator::new(
+            "astar-grid",
+            rover.clone(),
+            GridNavigatorConfig { planner: "astar", ..Default::default() },
+        ))),
+        "mrpta" => Some(Box::new(GridNavigator::new(
+            "mrpta",
+            rover.clone(),
+            GridNavigatorConfig { planner: "dstar-lite", ..Default::default() },
+        ))),
+        _ => None,
+    }
+}

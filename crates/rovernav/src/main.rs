@@ -1,1 +1,114 @@
-fn main() {}
+//! `rovernav`: run autonomous rover traverses, benchmarks and evaluations from the command line.
+
+mod bench;
+mod output;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use rovernav_executive::{Mission, run_mission};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Autonomous navigation for planetary rovers.
+#[derive(Parser, Debug)]
+#[command(name = "rovernav", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a mission (the built-in default mission when no file is given).
+    Run(RunArgs),
+    /// Planner benchmarks on MovingAI maps and PGM cost maps.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// Options of `rovernav run`.
+#[derive(clap::Args, Debug, Default)]
+struct RunArgs {
+    /// Mission file (TOML); omit for the built-in default mission.
+    mission: Option<PathBuf>,
+    /// Override the mission's seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Override the mission's navigator (registry name).
+    #[arg(long)]
+    navigator: Option<String>,
+    /// Print report.json to standard output.
+    #[arg(long)]
+    json: bool,
+    /// Output folder (default: out/<mission name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => run(RunArgs::default()),
+        Some(Command::Run(args)) => run(args),
+        Some(Command::Bench(cmd)) => bench::run(cmd),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: RunArgs) -> anyhow::Result<()> {
+    let (mut mission, origin) = match &args.mission {
+        Some(path) => (Mission::from_file(path)?, path.display().to_string()),
+        None => (Mission::default_mission(), "built-in default mission".to_string()),
+    };
+    let mut origin_of_navigator = origin.clone();
+    if let Some(seed) = args.seed {
+        mission.seed = seed;
+    }
+    if let Some(nav) = &args.navigator {
+        mission.navigator = nav.clone();
+        origin_of_navigator = "--navigator".into();
+    }
+    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
+
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {percent}% of time budget")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("{} / {}", mission.name, mission.navigator));
+    let mut on_progress = |p: &rovernav_executive::Progress| {
+        bar.set_position((p.time_fraction * 1000.0) as u64);
+        bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
+    };
+    let output = run_mission(&mission, &origin_of_navigator, &mut on_progress);
+    bar.finish_and_clear();
+    let output = output?;
+    output::write_run_outputs(&out_dir, &output)?;
+    let report = &output.report;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(report)?);
+    } else {
+        println!(
+            "{}: {} ({}) · goal error {:.2} m · driven {:.1} m (optimal {}) · hazard contacts {} · {} cycles · {:.0} s simulated · {:.1} s wall",
+            report.mission,
+            report.outcome,
+            report.navigator,
+            report.goal_error_m,
+            report.distance_driven_m,
+            report.optimal_length_m.map_or("n/a".to_string(), |v| format!("{v:.1} m")),
+            report.hazard_contacts,
+            report.cycles,
+            report.sim_time_s,
+            report.wall_time_s,
+        );
+        println!("outputs in {}", out_dir.display());
+    }
+    Ok(())
+}

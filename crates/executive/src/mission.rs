@@ -1,0 +1,369 @@
+//! The mission file: terrain, rover, sensors, start, goal, navigator, limits and seed (TOML).
+//!
+//! Unknown fields are rejected so that a misspelt key is an error naming the key and its line,
+//! not a silently ignored setting.
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The built-in default mission (`missions/default.toml`).
+pub const DEFAULT_MISSION_TOML: &str = include_str!("../../../missions/default.toml");
+
+/// A complete mission description.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Mission {
+    /// Human-readable name.
+    #[serde(default = "default_name")]
+    pub name: String,
+    /// Seed for terrain generation and every sensor's noise.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Registry name of the navigator.
+    #[serde(default = "default_navigator")]
+    pub navigator: String,
+    /// Registry name of the localiser.
+    #[serde(default = "default_localizer")]
+    pub localizer: String,
+    /// Mission time budget (s); exceeding it ends the run with `timeout`.
+    #[serde(default = "default_time_limit")]
+    pub time_limit_s: f64,
+    /// Upper bound on navigator cycles; exceeding it ends the run with `timeout`.
+    #[serde(default = "default_max_cycles")]
+    pub max_cycles: u64,
+    /// The world.
+    pub terrain: TerrainSpec,
+    /// Optional rover overrides.
+    #[serde(default)]
+    pub rover: RoverSpec,
+    /// Optional sensor overrides.
+    #[serde(default)]
+    pub sensors: SensorSpec,
+    /// Start pose.
+    pub start: PoseSpec,
+    /// Goal.
+    pub goal: GoalSpec,
+    /// Folder the mission file was read from (relative DEM paths resolve against it first).
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
+}
+
+fn default_name() -> String {
+    "mission".into()
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_navigator() -> String {
+    "astar-grid".into()
+}
+fn default_localizer() -> String {
+    "dead-reckoning".into()
+}
+fn default_time_limit() -> f64 {
+    3600.0
+}
+fn default_max_cycles() -> u64 {
+    5000
+}
+
+/// Where the terrain comes from.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum TerrainSpec {
+    /// A procedural Mars yard.
+    Procedural {
+        /// Side of the square yard (m).
+        #[serde(default = "default_size")]
+        size_m: f64,
+        /// Height-grid resolution (m).
+        #[serde(default = "default_resolution")]
+        resolution_m: f64,
+        /// Golombek-Rapp rock abundance k (cumulative fractional area of rocks).
+        #[serde(default = "default_rock_abundance")]
+        rock_abundance: f64,
+        /// Amplitude of the fractal relief (m).
+        #[serde(default = "default_relief")]
+        relief_m: f64,
+        /// Regional slope (deg).
+        #[serde(default)]
+        slope_deg: f64,
+        /// Craters per 100 m x 100 m with diameter at least 1 m.
+        #[serde(default)]
+        craters_per_hectare: Option<f64>,
+    },
+    /// A real elevation model.
+    Dem {
+        /// File path: absolute, relative to the mission file, or relative to `ROVERNAV_DATA`.
+        path: PathBuf,
+        /// Region [min easting, min northing, max easting, max northing] in projected metres.
+        region: Option<[f64; 4]>,
+        /// Resampled resolution (m).
+        #[serde(default = "default_dem_resolution")]
+        resolution_m: f64,
+        /// Rock abundance k of rocks added on top of the DEM (0 for none).
+        #[serde(default)]
+        rock_abundance: f64,
+    },
+}
+
+fn default_size() -> f64 {
+    30.0
+}
+fn default_resolution() -> f64 {
+    0.05
+}
+fn default_rock_abundance() -> f64 {
+    0.16
+}
+fn default_relief() -> f64 {
+    0.25
+}
+fn default_dem_resolution() -> f64 {
+    0.1
+}
+
+/// Optional overrides of the rover's dimensions and sensors (defaults: `RoverConfig::default`).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RoverSpec {
+    /// Body length (m).
+    pub length_m: Option<f64>,
+    /// Body width (m).
+    pub width_m: Option<f64>,
+    /// Belly clearance (m).
+    pub clearance_m: Option<f64>,
+    /// Tilt limit (deg).
+    pub max_tilt_deg: Option<f64>,
+    /// Top speed (m/s).
+    pub max_speed_mps: Option<f64>,
+    /// Mast stereo useful range (m).
+    pub mast_range_m: Option<f64>,
+    /// Mast stereo field of view (deg).
+    pub mast_fov_deg: Option<f64>,
+}
+
+/// Optional overrides of the sensor noise (defaults: the simulator's `SensorModel::default`).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSpec {
+    /// Compass noise sigma (deg).
+    pub compass_sigma_deg: Option<f64>,
+    /// Probability that a stereo pixel gives no range.
+    pub stereo_dropout: Option<f64>,
+}
+
+/// A pose in either local or projected coordinates.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PoseSpec {
+    /// Local east (m).
+    pub x: Option<f64>,
+    /// Local north (m).
+    pub y: Option<f64>,
+    /// Projected easting (m), for DEM missions.
+    pub easting: Option<f64>,
+    /// Projected northing (m), for DEM missions.
+    pub northing: Option<f64>,
+    /// Heading, counter-clockwise from east (deg).
+    #[serde(default)]
+    pub yaw_deg: f64,
+}
+
+/// The goal, waypoints and keep-out zones.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSpec {
+    /// Local east (m).
+    pub x: Option<f64>,
+    /// Local north (m).
+    pub y: Option<f64>,
+    /// Projected easting (m).
+    pub easting: Option<f64>,
+    /// Projected northing (m).
+    pub northing: Option<f64>,
+    /// Arrival tolerance (m).
+    #[serde(default = "default_tolerance")]
+    pub tolerance_m: f64,
+    /// Waypoints to visit first, as [x, y] in the same frame as the goal.
+    #[serde(default)]
+    pub waypoints: Vec<[f64; 2]>,
+    /// Keep-out polygons, each a list of [x, y] vertices in the same frame as the goal.
+    #[serde(default)]
+    pub keep_out: Vec<Vec<[f64; 2]>>,
+}
+
+fn default_tolerance() -> f64 {
+    0.5
+}
+
+/// A mission that could not be read or does not make sense.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or schema error (the message carries line and field).
+    #[error("{path}: {message}")]
+    Parse {
+        /// File.
+        path: String,
+        /// What toml said, flattened to one line.
+        message: String,
+    },
+    /// A field has an invalid value.
+    #[error("{path}: field `{field}`: {message}")]
+    Invalid {
+        /// File.
+        path: String,
+        /// Dotted field name.
+        field: String,
+        /// Why.
+        message: String,
+    },
+}
+
+impl Mission {
+    /// Parses mission text; `origin` names the source in error messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, MissionError> {
+        let mission: Mission = toml::from_str(text).map_err(|e| {
+            let mut message = String::new();
+            if let Some(span) = e.span() {
+                let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+                message.push_str(&format!("line {line}: "));
+            }
+            message.push_str(&e.message().replace('\n', " "));
+            MissionError::Parse { path: origin.into(), message }
+        })?;
+        mission.validate(origin)?;
+        Ok(mission)
+    }
+
+    /// Reads and validates a mission file.
+    pub fn from_file(path: &Path) -> Result<Self, MissionError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| MissionError::Io { path: shown.clone(), source })?;
+        let mut m = Self::from_toml(&text, &shown)?;
+        m.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(m)
+    }
+
+    /// The built-in default mission.
+    pub fn default_mission() -> Self {
+        Self::from_toml(DEFAULT_MISSION_TOML, "built-in default mission")
+            .expect("the built-in mission is valid")
+    }
+
+    fn validate(&self, origin: &str) -> Result<(), MissionError> {
+        let bad = |field: &str, message: &str| {
+            Err(MissionError::Invalid { path: origin.into(), field: field.into(), message: message.into() })
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.time_limit_s) {
+            return bad("time_limit_s", "must be a positive number of seconds");
+        }
+        match &self.terrain {
+            TerrainSpec::Procedural { size_m, resolution_m, rock_abundance, relief_m, slope_deg, .. } => {
+                if !positive(*size_m) || *size_m > 2000.0 {
+                    return bad("terrain.size_m", "must be in (0, 2000] m");
+                }
+                if !positive(*resolution_m) || *resolution_m > *size_m / 4.0 {
+                    return bad("terrain.resolution_m", "must be positive and much smaller than the yard");
+                }
+                if (size_m / resolution_m).powi(2) > 1.0e8 {
+                    return bad("terrain.resolution_m", "yard too large at this resolution (over 1e8 cells)");
+                }
+                if !(0.0..=0.5).contains(rock_abundance) {
+                    return bad("terrain.rock_abundance", "must be in [0, 0.5]");
+                }
+                if !(relief_m.is_finite() && *relief_m >= 0.0) {
+                    return bad("terrain.relief_m", "must be a non-negative number");
+                }
+                if !(slope_deg.is_finite() && slope_deg.abs() < 45.0) {
+                    return bad("terrain.slope_deg", "must be within (-45, 45) deg");
+                }
+            }
+            TerrainSpec::Dem { resolution_m, rock_abundance, region, .. } => {
+                if !positive(*resolution_m) {
+                    return bad("terrain.resolution_m", "must be positive");
+                }
+                if !(0.0..=0.5).contains(rock_abundance) {
+                    return bad("terrain.rock_abundance", "must be in [0, 0.5]");
+                }
+                if let Some(r) = region
+                    && !(r.iter().all(|v| v.is_finite()) && r[2] > r[0] && r[3] > r[1])
+                {
+                    return bad("terrain.region", "must be [min E, min N, max E, max N] with max > min");
+                }
+            }
+        }
+        for (name, spec) in [
+            ("start", (&self.start.x, &self.start.y, &self.start.easting, &self.start.northing)),
+            ("goal", (&self.goal.x, &self.goal.y, &self.goal.easting, &self.goal.northing)),
+        ] {
+            let (x, y, e, n) = spec;
+            let local = x.is_some() && y.is_some();
+            let projected = e.is_some() && n.is_some();
+            if local == projected {
+                return bad(
+                    name,
+                    "give either x and y (local metres) or easting and northing (projected metres)",
+                );
+            }
+            if [x, y, e, n].iter().any(|v| v.is_some_and(|v| !v.is_finite())) {
+                return bad(name, "coordinates must be finite numbers");
+            }
+        }
+        if !self.start.yaw_deg.is_finite() {
+            return bad("start.yaw_deg", "must be a finite number");
+        }
+        if !positive(self.goal.tolerance_m) {
+            return bad("goal.tolerance_m", "must be positive");
+        }
+        for (i, zone) in self.goal.keep_out.iter().enumerate() {
+            if zone.len() < 3 {
+                return bad(&format!("goal.keep_out[{i}]"), "a polygon needs at least 3 vertices");
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_mission_parses() {
+        let m = Mission::default_mission();
+        assert_eq!(m.navigator, "astar-grid");
+        assert!(matches!(m.terrain, TerrainSpec::Procedural { .. }));
+    }
+
+    #[test]
+    fn misspelt_field_is_named_with_its_line() {
+        let text = DEFAULT_MISSION_TOML.replace("navigator =", "navigatr =");
+        let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
+        assert!(err.contains("m.toml") && err.contains("navigatr") && err.contains("line "), "{err}");
+    }
+
+    #[test]
+    fn invalid_value_names_the_field() {
+        let text = DEFAULT_MISSION_TOML.replace("rock_abundance = 0.16", "rock_abundance = 3.0");
+        let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
+        assert!(err.contains("terrain.rock_abundance"), "{err}");
+    }
+
+    #[test]
+    fn start_needs_one_coordinate_frame() {
+        let text = DEFAULT_MISSION_TOML.replace("x = 5.0\n", "");
+        let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
+        assert!(err.contains("`start`"), "{err}");
+    }
+}

@@ -1,0 +1,259 @@
+//! Building the world a mission names: terrain, rover, sensors, start and goal in local metres.
+
+use crate::mission::{GoalSpec, Mission, PoseSpec, TerrainSpec};
+use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
+use rovernav_planning::{AStar, Cell, CostGrid, GlobalPlanner, GraphKind};
+use rovernav_sim::SensorModel;
+use rovernav_terrain::procedural::{ClearPad, RockyRegionParams, rocky_region};
+use rovernav_terrain::{LocalRect, MarsYardParams, RockFieldParams, Terrain};
+use std::path::PathBuf;
+
+/// The world of one run, in the terrain's local frame.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// Ground truth terrain (the simulator's; the autonomy never reads it).
+    pub terrain: Terrain,
+    /// The rover.
+    pub rover: RoverConfig,
+    /// Sensor noise models.
+    pub sensor_model: SensorModel,
+    /// True start pose.
+    pub start: Pose2,
+    /// Goal, waypoints and keep-out zones.
+    pub goal: Goal,
+}
+
+/// Why the world could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    /// The DEM file is missing or unreadable.
+    #[error("{origin}: field `terrain.path`: {message}")]
+    Dem {
+        /// Mission source.
+        origin: String,
+        /// Loader message (names the file).
+        message: String,
+    },
+    /// A field's value does not fit the terrain.
+    #[error("{origin}: field `{field}`: {message}")]
+    Invalid {
+        /// Mission source.
+        origin: String,
+        /// Dotted field name.
+        field: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// Resolves a data path: absolute, relative to the mission file, or relative to `ROVERNAV_DATA`.
+fn resolve_data_path(mission: &Mission, path: &PathBuf) -> PathBuf {
+    if path.is_absolute() {
+        return path.clone();
+    }
+    if let Some(base) = &mission.base_dir {
+        let p = base.join(path);
+        if p.exists() {
+            return p;
+        }
+    }
+    rovernav_core::data_dir().join(path)
+}
+
+/// The rover configuration with the mission's overrides.
+pub fn rover_config(mission: &Mission) -> RoverConfig {
+    let r = &mission.rover;
+    let d = RoverConfig::default();
+    RoverConfig {
+        length: r.length_m.unwrap_or(d.length),
+        width: r.width_m.unwrap_or(d.width),
+        clearance: r.clearance_m.unwrap_or(d.clearance),
+        max_tilt: r.max_tilt_deg.map_or(d.max_tilt, f64::to_radians),
+        max_speed: r.max_speed_mps.unwrap_or(d.max_speed),
+        mast_range: r.mast_range_m.unwrap_or(d.mast_range),
+        mast_fov: r.mast_fov_deg.map_or(d.mast_fov, f64::to_radians),
+        ..d
+    }
+}
+
+/// Builds the world of a mission; `origin` names the mission in error messages.
+pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError> {
+    let rover = rover_config(mission);
+    let mut sensor_model = SensorModel::default();
+    if let Some(s) = mission.sensors.compass_sigma_deg {
+        sensor_model.compass_sigma = s.to_radians();
+    }
+    if let Some(p) = mission.sensors.stereo_dropout {
+        sensor_model.mast.dropout = p;
+        sensor_model.body.dropout = p;
+    }
+    let invalid = |field: &str, message: String| WorldError::Invalid {
+        origin: origin.into(),
+        field: field.into(),
+        message,
+    };
+
+    let (terrain, to_local): (Terrain, Box<dyn Fn(f64, f64) -> (f64, f64)>) = match &mission.terrain {
+        TerrainSpec::Procedural {
+            size_m,
+            resolution_m,
+            rock_abundance,
+            relief_m,
+            slope_deg,
+            craters_per_hectare,
+        } => {
+            let start = local_point(&mission.start_xy(), &|e, n| (e, n));
+            let goal = local_point(&mission.goal_xy(), &|e, n| (e, n));
+            let mut params = MarsYardParams {
+                width_m: *size_m,
+                height_m: *size_m,
+                resolution: *resolution_m,
+                seed: mission.seed,
+                relief_amplitude_m: *relief_m,
+                regional_slope_deg: *slope_deg,
+                rocks: RockFieldParams { abundance: *rock_abundance, ..Default::default() },
+                clear_pads: vec![pad(start), pad(goal)],
+                ..Default::default()
+            };
+            if let Some(c) = craters_per_hectare {
+                params.crater_density = c / 10_000.0;
+            }
+            (rovernav_terrain::procedural::generate(&params), Box::new(|e, n| (e, n)))
+        }
+        TerrainSpec::Dem { path, region, resolution_m, rock_abundance } => {
+            let file = resolve_data_path(mission, path);
+            let dem = rovernav_terrain::io::load_geotiff(&file)
+                .map_err(|e| WorldError::Dem { origin: origin.into(), message: e.to_string() })?;
+            let g = *dem.geometry();
+            let region = match region {
+                Some([e0, n0, e1, n1]) => {
+                    let (x0, y0) = dem.to_local(*e0, *n0);
+                    let (x1, y1) = dem.to_local(*e1, *n1);
+                    LocalRect { x_min: x0, y_min: y0, x_max: x1, y_max: y1 }
+                }
+                None => LocalRect::from_corner_size(g.origin_x, g.origin_y, g.width_m(), g.height_m()),
+            };
+            let source_geo = dem.geo.clone();
+            let source_local = move |e: f64, n: f64| (e - source_geo.easting, n - source_geo.northing);
+            let params = RockyRegionParams {
+                region,
+                resolution: *resolution_m,
+                rocks: RockFieldParams { abundance: *rock_abundance, ..Default::default() },
+                micro_relief_m: 0.03,
+                seed: mission.seed,
+                clear_pads: vec![
+                    pad(local_point(&mission.start_xy(), &source_local)),
+                    pad(local_point(&mission.goal_xy(), &source_local)),
+                ],
+            };
+            let terrain =
+                rocky_region(&dem, &params).map_err(|e| invalid("terrain.region", e.to_string()))?.rebased();
+            let geo = terrain.dem.geo.clone();
+            let to_local = move |e: f64, n: f64| (e - geo.easting, n - geo.northing);
+            (terrain, Box::new(to_local))
+        }
+    };
+
+    let start_xy = local_point(&mission.start_xy(), &*to_local);
+    let goal_xy = local_point(&mission.goal_xy(), &*to_local);
+    for (field, p) in [("start", start_xy), ("goal", goal_xy)] {
+        if terrain.dem.height(p.x, p.y).is_none() {
+            let g = terrain.dem.geometry();
+            return Err(invalid(
+                field,
+                format!(
+                    "({:.2}, {:.2}) is outside the terrain (local extent {:.1} x {:.1} m) or has no elevation data",
+                    p.x,
+                    p.y,
+                    g.width_m(),
+                    g.height_m()
+                ),
+            ));
+        }
+    }
+    let spec_to_local = |v: &[f64; 2]| {
+        let (x, y) = if mission.goal.easting.is_some() { to_local(v[0], v[1]) } else { (v[0], v[1]) };
+        Point2::new(x, y)
+    };
+    let goal = Goal {
+        position: goal_xy,
+        tolerance: mission.goal.tolerance_m,
+        waypoints: mission.goal.waypoints.iter().map(spec_to_local).collect(),
+        keep_out: mission.goal.keep_out.iter().map(|z| z.iter().map(spec_to_local).collect()).collect(),
+    };
+    Ok(World {
+        terrain,
+        rover,
+        sensor_model,
+        start: Pose2::new(start_xy.x, start_xy.y, mission.start.yaw_deg.to_radians()),
+        goal,
+    })
+}
+
+/// A rock-free pad around a mission's start or goal, larger than the rover.
+fn pad(p: Point2) -> ClearPad {
+    ClearPad { x: p.x, y: p.y, radius: 1.0 }
+}
+
+/// A pose or goal's coordinates: `(value, projected?)`.
+type SpecXy = ((f64, f64), bool);
+
+fn local_point(spec: &SpecXy, to_local: &dyn Fn(f64, f64) -> (f64, f64)) -> Point2 {
+    let ((a, b), projected) = *spec;
+    let (x, y) = if projected { to_local(a, b) } else { (a, b) };
+    Point2::new(x, y)
+}
+
+impl Mission {
+    fn start_xy(&self) -> SpecXy {
+        pose_xy(&self.start)
+    }
+    fn goal_xy(&self) -> SpecXy {
+        goal_xy(&self.goal)
+    }
+}
+
+fn pose_xy(p: &PoseSpec) -> SpecXy {
+    match (p.x, p.y, p.easting, p.northing) {
+        (Some(x), Some(y), _, _) => ((x, y), false),
+        (_, _, Some(e), Some(n)) => ((e, n), true),
+        _ => ((f64::NAN, f64::NAN), false),
+    }
+}
+
+fn goal_xy(g: &GoalSpec) -> SpecXy {
+    match (g.x, g.y, g.easting, g.northing) {
+        (Some(x), Some(y), _, _) => ((x, y), false),
+        (_, _, Some(e), Some(n)) => ((e, n), true),
+        _ => ((f64::NAN, f64::NAN), false),
+    }
+}
+
+/// Cell size of the ground-truth hazard grid used for the optimal path (m).
+const OPTIMAL_PATH_RESOLUTION: f64 = 0.1;
+
+/// Length of the shortest safe path with full knowledge of the true terrain (m), if one exists:
+/// Field D* (any-angle) through the cells where the simulator's hazard model says the rover
+/// centre is safe in every heading.
+pub fn optimal_length(world: &World) -> Option<f64> {
+    let hazard = rovernav_sim::true_hazard_grid(&world.terrain, &world.rover, OPTIMAL_PATH_RESOLUTION);
+    let g = hazard.geometry;
+    let mut grid = CostGrid::from_occupancy(&hazard);
+    grid.set_geometry(g);
+    let cell = |p: Point2| g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c));
+    let (start, goal) = (cell(world.start.position())?, cell(world.goal.position)?);
+    // The rover starts (and the goal lies) in a cleared pad; make sure rounding to a cell
+    // never declares a pad's own centre unsafe.
+    let _ = grid.set_cost(start, 1.0);
+    let _ = grid.set_cost(goal, 1.0);
+    let mut planner = AStar::new(GraphKind::CellCentres);
+    planner.set_grid(grid);
+    let plan = planner.plan(start, goal).ok()?;
+    // The planner runs between cell centres (or corners); add the offsets to the true points.
+    let to_world = |p: Point2| Point2::new(g.origin_x + p.x * g.resolution, g.origin_y + p.y * g.resolution);
+    let mut length = plan.cost * g.resolution;
+    if let (Some(first), Some(last)) = (plan.points.first(), plan.points.last()) {
+        length += to_world(*first).dist(world.start.position()) + to_world(*last).dist(world.goal.position);
+    }
+    Some(length)
+}

@@ -1,0 +1,265 @@
+//! Maximum-likelihood terrain matching (paper 000 section 4, Olson's formulation).
+//!
+//! The measurements are the distances `D_i` from the occupied cells of the local map, placed at
+//! a candidate pose, to the closest occupied cells of the global map (both maps as 3D occupancy
+//! grids, z discretised at the grid scale, after a high-pass filter that removes the unknown
+//! vertical offset). The log-likelihood of a pose is `sum_i ln(alpha p1(D_i) + (1 - alpha) K)`
+//! with `p1` a zero-mean normal of standard deviation `sigma` (inliers) and `K` a constant
+//! density (outliers: range shadows in the global map, bad range data in the local one). The
+//! search, subpixel fit, covariance and failure probability are in [`super::engine`].
+
+use rovernav_core::Grid2;
+
+use super::elevation::high_pass;
+use super::engine::{
+    BoundKind, DistanceScore, LocalCells, MatchDetails, PeakAnalysis, PoseLattice, Scorer, SearchOutcome,
+    SplitRule, VoxelMap, run_match,
+};
+use super::{MatchError, MatchResult, SearchWindow};
+
+/// Parameters of the maximum-likelihood matcher.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MlParams {
+    /// Standard deviation of the inlier distance distribution, in grid cells.
+    pub sigma_cells: f64,
+    /// Probability that a local cell is an inlier (alpha).
+    pub inlier_fraction: f64,
+    /// Outlier density K as a fraction of the inlier density's peak `p1(0)`.
+    pub outlier_ratio: f64,
+    /// Side of the high-pass filter window (m); `None` matches raw heights (then both maps
+    /// must share a vertical datum).
+    pub high_pass_window: Option<f64>,
+    /// Height layers are `resolution / vertical_exaggeration` thick (1 = the grid scale, as
+    /// in the paper; more makes gentle relief count on coarse grids).
+    pub vertical_exaggeration: f64,
+    /// Distances saturate at this many sigmas (beyond it the inlier term is negligible).
+    pub cap_sigmas: f64,
+    /// Score differences per unit of log-probability: the number of local cells that behave
+    /// as one independent measurement (neighbouring cells share stereo errors).
+    pub temperature: f64,
+    /// Competitors weaker than the best by more than this many temperature units are not
+    /// searched for (their failure probability is below e^-margin).
+    pub failure_margin: f64,
+    /// A local cell over an unknown part of the global map scores as if at this many sigmas
+    /// (neither rewarded nor punished: the map has no information there). The paper scores
+    /// it as an outlier, which biases matches towards maximum overlap.
+    pub unknown_sigmas: f64,
+    /// How cells of poses are bounded.
+    pub bound: BoundKind,
+    /// How cells of poses are split.
+    pub split: SplitRule,
+}
+
+impl Default for MlParams {
+    fn default() -> Self {
+        Self {
+            sigma_cells: 1.0,
+            inlier_fraction: 0.5,
+            outlier_ratio: 0.05,
+            high_pass_window: Some(1.0),
+            vertical_exaggeration: 1.0,
+            cap_sigmas: 5.0,
+            temperature: 20.0,
+            failure_margin: 12.0,
+            unknown_sigmas: 1.0,
+            bound: BoundKind::MinPool,
+            split: SplitRule::HeadingFirst,
+        }
+    }
+}
+
+impl MlParams {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), MatchError> {
+        let checks: [(&'static str, f64, bool, &'static str); 6] = [
+            ("sigma_cells", self.sigma_cells, self.sigma_cells > 0.0, "> 0"),
+            (
+                "inlier_fraction",
+                self.inlier_fraction,
+                self.inlier_fraction > 0.0 && self.inlier_fraction <= 1.0,
+                "in (0, 1]",
+            ),
+            ("outlier_ratio", self.outlier_ratio, self.outlier_ratio > 0.0, "> 0"),
+            ("cap_sigmas", self.cap_sigmas, self.cap_sigmas >= 1.0, ">= 1"),
+            ("temperature", self.temperature, self.temperature > 0.0, "> 0"),
+            ("failure_margin", self.failure_margin, self.failure_margin > 0.0, "> 0"),
+        ];
+        for (field, value, ok, expected) in checks {
+            if !ok || !value.is_finite() {
+                return Err(MatchError::BadParameter { field, value, expected });
+            }
+        }
+        if let Some(w) = self.high_pass_window
+            && !(w > 0.0 && w.is_finite())
+        {
+            return Err(MatchError::BadParameter { field: "high_pass_window", value: w, expected: "> 0" });
+        }
+        Ok(())
+    }
+}
+
+/// The per-cell log-likelihood `ln(alpha p1(D) + (1 - alpha) K)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MixtureLikelihood {
+    sigma: f64,
+    alpha: f64,
+    outlier_density: f64,
+}
+
+impl MixtureLikelihood {
+    /// The mixture for a grid resolution (m) and matcher parameters.
+    pub fn new(resolution: f64, params: &MlParams) -> Self {
+        let sigma = params.sigma_cells * resolution;
+        let peak = 1.0 / (sigma * (2.0 * std::f64::consts::PI).sqrt());
+        Self { sigma, alpha: params.inlier_fraction, outlier_density: params.outlier_ratio * peak }
+    }
+}
+
+impl DistanceScore for MixtureLikelihood {
+    fn score(&self, d: f64) -> f64 {
+        let z = d / self.sigma;
+        let p1 = (-0.5 * z * z).exp() / (self.sigma * (2.0 * std::f64::consts::PI).sqrt());
+        (self.alpha * p1 + (1.0 - self.alpha) * self.outlier_density).ln()
+    }
+}
+
+/// Min-filter levels kept for a bound kind (half-sides 1 to 16 cells).
+pub(crate) fn pool_levels(bound: BoundKind) -> usize {
+    match bound {
+        BoundKind::MinPool => 5,
+        BoundKind::Distance => 0,
+    }
+}
+
+/// A maximum-likelihood matcher holding the prepared global map.
+#[derive(Clone, Debug)]
+pub struct MlMatcher {
+    params: MlParams,
+    voxels: VoxelMap,
+    likelihood: MixtureLikelihood,
+}
+
+impl MlMatcher {
+    /// Prepares a world-frame global elevation map (NaN = unknown) for matching.
+    pub fn new(global: &Grid2<f32>, params: MlParams) -> Result<Self, MatchError> {
+        params.validate()?;
+        let filtered = match params.high_pass_window {
+            Some(w) => high_pass(global, w),
+            None => global.clone(),
+        };
+        let cap_cells = (params.cap_sigmas * params.sigma_cells).ceil() as u32;
+        let voxels =
+            VoxelMap::new(&filtered, cap_cells, params.vertical_exaggeration, pool_levels(params.bound))?;
+        let likelihood = MixtureLikelihood::new(voxels.resolution(), &params);
+        Ok(Self { params, voxels, likelihood })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &MlParams {
+        &self.params
+    }
+
+    /// Distance whose score a local cell gets over an unknown part of the global map.
+    fn neutral_distance(&self) -> f64 {
+        self.params.unknown_sigmas * self.params.sigma_cells * self.voxels.resolution()
+    }
+
+    /// Matches a rover-frame local map by branch and bound around the window's centre.
+    pub fn match_map(&self, local: &Grid2<f32>, window: &SearchWindow) -> Result<MatchResult, MatchError> {
+        Ok(self.match_detailed(local, window, false)?.result)
+    }
+
+    /// Matches by scoring every pose of the lattice (the reference for tests).
+    pub fn exhaustive_search(
+        &self,
+        local: &Grid2<f32>,
+        window: &SearchWindow,
+    ) -> Result<MatchResult, MatchError> {
+        Ok(self.match_detailed(local, window, true)?.result)
+    }
+
+    /// Matches and returns the search details (lattice, best index, failure search).
+    pub fn match_detailed(
+        &self,
+        local: &Grid2<f32>,
+        window: &SearchWindow,
+        exhaustive: bool,
+    ) -> Result<MatchDetails, MatchError> {
+        window.validate()?;
+        let r = local.resolution();
+        if !(r > 0.0 && r.is_finite()) {
+            return Err(MatchError::BadResolution { map: "local", value: r });
+        }
+        let filtered = match self.params.high_pass_window {
+            Some(w) => high_pass(local, w),
+            None => local.clone(),
+        };
+        let cells = LocalCells::new(&filtered, &self.voxels)?;
+        let mut scorer = Scorer::new(
+            &self.voxels,
+            &cells,
+            &self.likelihood,
+            window,
+            self.params.bound,
+            self.params.split,
+            self.neutral_distance(),
+        );
+        let analysis = PeakAnalysis {
+            temperature: self.params.temperature,
+            failure_margin: self.params.failure_margin,
+            min_exclusion: 3,
+            fit_radius: 2,
+            max_competitors: 4,
+        };
+        Ok(run_match(&mut scorer, &analysis, exhaustive))
+    }
+
+    /// Runs only the search (no peak fit, no failure search): the best lattice pose by branch
+    /// and bound or by scoring every pose, with the lattice searched.
+    pub fn search(
+        &self,
+        local: &Grid2<f32>,
+        window: &SearchWindow,
+        exhaustive: bool,
+    ) -> Result<(SearchOutcome, PoseLattice), MatchError> {
+        window.validate()?;
+        let filtered = match self.params.high_pass_window {
+            Some(w) => high_pass(local, w),
+            None => local.clone(),
+        };
+        let cells = LocalCells::new(&filtered, &self.voxels)?;
+        let mut scorer = Scorer::new(
+            &self.voxels,
+            &cells,
+            &self.likelihood,
+            window,
+            self.params.bound,
+            self.params.split,
+            self.neutral_distance(),
+        );
+        let outcome = if exhaustive {
+            scorer.exhaustive()
+        } else {
+            scorer.branch_and_bound(f64::NEG_INFINITY, Some([0, 0, 0]), &[])
+        };
+        Ok((outcome, scorer.lattice()))
+    }
+
+    /// Log-likelihood of a local map at a continuous pose (nearest-voxel lookup), for
+    /// diagnostics and target selection.
+    pub fn log_likelihood_at(&self, local: &Grid2<f32>, pose: rovernav_core::Pose2) -> f64 {
+        let filtered = match self.params.high_pass_window {
+            Some(w) => high_pass(local, w),
+            None => local.clone(),
+        };
+        let r = self.voxels.resolution();
+        super::elevation::occupied_cells(&filtered)
+            .into_iter()
+            .map(|[x, y, z]| {
+                let w = pose.transform(rovernav_core::Point2::new(x, y));
+                let n = self.voxels.squared_distance_at(w.x, w.y, z);
+                self.likelihood.score(f64::from(n).sqrt() * r)
+            })
+            .sum()
+    }
+}

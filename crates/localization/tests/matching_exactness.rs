@@ -1,0 +1,171 @@
+//! Branch and bound against exhaustive search at the same discretisation (paper 000 section
+//! 4.2: "guaranteed to locate the optimal position in the discretised search space").
+
+mod common;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rovernav_core::Pose2;
+use rovernav_localization::matching::{
+    BoundKind, HausdorffMatcher, HausdorffParams, MlMatcher, MlParams, SearchWindow, SplitRule,
+};
+
+/// Totals over a batch of cases.
+#[derive(Default)]
+struct Tally {
+    lattice: u64,
+    tested: u64,
+    evaluations: u64,
+}
+
+/// Runs `cases` random cases; each must find the exhaustive optimum's score, at the same pose
+/// unless two poses tie.
+fn run_ml_cases(first_seed: u64, cases: u64, bound: BoundKind, split: SplitRule) -> Tally {
+    let resolution = 0.1;
+    let mut tally = Tally::default();
+    for case in first_seed..first_seed + cases {
+        let mut rng = ChaCha8Rng::seed_from_u64(case);
+        let field = common::rocky_terrain(14.0, resolution, case / 5);
+        let global = common::global_map(&field, resolution, 6.5);
+        let truth =
+            Pose2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-3.0..3.0));
+        let local = common::wedge_map(
+            &field,
+            &truth,
+            resolution,
+            common::WedgeView { range: 3.5, half_angle: 0.5, noise: 0.01, holes: 0.1 },
+            case,
+        );
+        let params = MlParams {
+            bound,
+            split,
+            // 10 cm cells with 3.3 cm height layers: gentle relief still separates poses.
+            vertical_exaggeration: 3.0,
+            ..Default::default()
+        };
+        let matcher = MlMatcher::new(&global, params).expect("global map");
+        let window = SearchWindow {
+            center: Pose2::new(
+                truth.x + rng.random_range(-0.3..0.3),
+                truth.y + rng.random_range(-0.3..0.3),
+                truth.yaw + rng.random_range(-0.05..0.05),
+            ),
+            half_x: 1.5,
+            half_y: 1.5,
+            half_yaw: 0.08,
+        };
+        let (bb, lattice) = matcher.search(&local, &window, false).expect("match");
+        let (ex, _) = matcher.search(&local, &window, true).expect("match");
+        assert_eq!(bb.score, ex.score, "case {case}: branch and bound missed the optimum");
+        if bb.best != ex.best {
+            eprintln!("case {case}: tie between {:?} and {:?}", bb.best, ex.best);
+        }
+        assert_eq!(ex.evaluations, lattice.size());
+        tally.lattice += lattice.size();
+        tally.tested += bb.poses_tested;
+        tally.evaluations += bb.evaluations;
+    }
+    tally
+}
+
+fn report(name: &str, t: &Tally) -> (f64, f64) {
+    let tested = t.lattice as f64 / t.tested as f64;
+    let total = t.lattice as f64 / t.evaluations as f64;
+    eprintln!(
+        "{name}: lattice {} poses; branch and bound tested {} poses explicitly ({tested:.1}x \
+         fewer) and scored {} cells+poses in all ({total:.1}x fewer)",
+        t.lattice, t.tested, t.evaluations
+    );
+    (tested, total)
+}
+
+#[test]
+fn ml_branch_and_bound_equals_exhaustive_search_on_100_cases() {
+    // Four batches of 25 on two threads keep the dev-profile run short.
+    let batches: Vec<Tally> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..4)
+            .map(|b| s.spawn(move || run_ml_cases(b * 25, 25, BoundKind::MinPool, SplitRule::HeadingFirst)))
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("batch")).collect()
+    });
+    let total = batches.iter().fold(Tally::default(), |a, b| Tally {
+        lattice: a.lattice + b.lattice,
+        tested: a.tested + b.tested,
+        evaluations: a.evaluations + b.evaluations,
+    });
+    let (tested, total) = report("ML min-pool bound, heading-first split, 100 cases", &total);
+    // Small cases (about 600 local cells, 4805 poses) keep the exhaustive reference fast; the
+    // pruning grows with the local map and window (see the ignored test below).
+    assert!(tested >= 5.0 && total > 1.0, "pruning too weak: {tested:.1}x / {total:.1}x");
+}
+
+#[test]
+fn paper_bound_with_longest_axis_split_is_also_exact() {
+    let t = run_ml_cases(1000, 2, BoundKind::Distance, SplitRule::LongestAxis);
+    report("ML paper bound max(D - Delta, 0), longest-axis split, 2 cases", &t);
+}
+
+#[test]
+fn hausdorff_search_finds_the_exhaustive_best_count() {
+    let resolution = 0.1;
+    for case in 0..6u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(500 + case);
+        let field = common::rocky_terrain(14.0, resolution, 40 + case);
+        let global = common::global_map(&field, resolution, 6.5);
+        let truth = Pose2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.3);
+        let local = common::wedge_map(
+            &field,
+            &truth,
+            resolution,
+            common::WedgeView { range: 3.5, half_angle: 0.5, noise: 0.01, holes: 0.1 },
+            case,
+        );
+        let params = HausdorffParams { vertical_exaggeration: 3.0, ..Default::default() };
+        let matcher = HausdorffMatcher::new(&global, params).expect("global");
+        let window = SearchWindow {
+            center: Pose2::new(truth.x + 0.2, truth.y - 0.2, truth.yaw + 0.02),
+            half_x: 1.0,
+            half_y: 1.0,
+            half_yaw: 0.06,
+        };
+        let bb = matcher.match_detailed(&local, &window, false).expect("match");
+        let ex = matcher.match_detailed(&local, &window, true).expect("match");
+        assert_eq!(bb.result.log_likelihood, ex.result.log_likelihood, "case {case}");
+        // The best count is at the true pose, to within a cell.
+        let p = bb.result.pose;
+        assert!((p.x - truth.x).abs() <= 0.1 && (p.y - truth.y).abs() <= 0.1, "case {case}: {p:?}");
+    }
+}
+
+/// A rover-sized case: 5 cm cells, a 5 m forward wedge (about 5000 local cells), a +-1 m and
+/// +-0.1 rad window (31939 poses). Slow in the dev profile: run with
+/// `cargo test --release -- --ignored`.
+#[test]
+#[ignore]
+fn ml_branch_and_bound_prunes_rover_sized_searches() {
+    let resolution = 0.05;
+    let mut t = Tally::default();
+    for case in 0..4u64 {
+        let field = common::rocky_terrain(16.0, resolution, 70 + case);
+        let global = common::global_map(&field, resolution, 6.0);
+        let truth = Pose2::new(0.23, -0.41, 0.05);
+        let local = common::wedge_map(
+            &field,
+            &truth,
+            resolution,
+            common::WedgeView { range: 5.0, half_angle: 0.6, noise: 0.01, holes: 0.1 },
+            case,
+        );
+        let matcher = MlMatcher::new(&global, MlParams::default()).expect("global map");
+        let window =
+            SearchWindow { center: Pose2::new(0.0, 0.0, 0.0), half_x: 1.0, half_y: 1.0, half_yaw: 0.1 };
+        let (bb, lattice) = matcher.search(&local, &window, false).expect("match");
+        let (ex, _) = matcher.search(&local, &window, true).expect("match");
+        assert_eq!(bb.score, ex.score, "case {case}");
+        t.lattice += lattice.size();
+        t.tested += bb.poses_tested;
+        t.evaluations += bb.evaluations;
+    }
+    let (tested, _) = report("ML rover-sized, 4 cases", &t);
+    assert!(tested >= 50.0, "only {tested:.1}x fewer poses tested");
+}

@@ -1,0 +1,360 @@
+//! The grid navigator: sense a fan of stereo wedges, fold them into the world map, plan on the
+//! inflated hazard grid with a global planner (unknown terrain optimistic), drive the part of the
+//! plan that lies in sensed terrain, and repeat.
+//!
+//! With the octile A* planner and unknown cells as free this is rovernav's first navigator
+//! (`astar-grid`); with D* Lite on MRPTA traversability costs, where unsensed cells are neutral,
+//! and incremental replanning after each map update, it is MRPTA's navigation (`mrpta`, paper 004
+//! sections 3.4-3.5: the planner's path is cut to its sensed part and handed to a segment driver
+//! that rotates in place when consecutive segments differ by more than 10 deg).
+
+use crate::terrain_model::{CostMode, TerrainModel};
+use rovernav_core::{
+    DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
+    Point2, RoverConfig, SenseRequest, angle_diff,
+};
+use rovernav_planning::{Cell, GlobalPlanner, PlanError, planner_by_name};
+use std::collections::VecDeque;
+
+/// Tunable parameters of the grid navigator.
+#[derive(Clone, Debug)]
+pub struct GridNavigatorConfig {
+    /// Global planner registry name.
+    pub planner: &'static str,
+    /// Longest distance driven between sensing stops (m).
+    pub max_step: f64,
+    /// Map cell size (m).
+    pub map_resolution: f64,
+    /// Margin of the world map around the start-goal box (m).
+    pub map_margin: f64,
+    /// Extra clearance added to the rover radius when growing hazards (m).
+    pub safety_buffer: f64,
+    /// Mast pan offsets around the direction of interest (rad).
+    pub mast_fan: Vec<f64>,
+    /// Heading error above which the rover turns in place before driving (rad); paper 004's
+    /// segment driver uses 10 deg.
+    pub turn_threshold: f64,
+    /// Planning cycles without getting closer to the goal before asking for help.
+    pub patience: u32,
+}
+
+impl Default for GridNavigatorConfig {
+    fn default() -> Self {
+        Self {
+            planner: "astar",
+            max_step: 2.5,
+            map_resolution: 0.1,
+            map_margin: 15.0,
+            safety_buffer: 0.1,
+            mast_fan: vec![-0.7, 0.0, 0.7],
+            turn_threshold: 10f64.to_radians(),
+            patience: 25,
+        }
+    }
+}
+
+/// The grid navigator (see the module documentation).
+pub struct GridNavigator {
+    name: &'static str,
+    rover: RoverConfig,
+    config: GridNavigatorConfig,
+    terrain: Option<TerrainModel>,
+    planner: Box<dyn GlobalPlanner>,
+    waypoints: VecDeque<Point2>,
+    plan: Vec<Point2>,
+    stats: NavigatorStats,
+    finish: Option<(Outcome, String)>,
+    look_bearing: Option<f64>,
+    best_distance: f64,
+    cycles_without_progress: u32,
+    blocked_senses: u32,
+    backing_out: bool,
+    last_command: LastCommand,
+}
+
+/// The kind of the last motion commanded, to locate a hazard contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LastCommand {
+    Forward,
+    Reverse,
+    Turn(f64),
+    Other,
+}
+
+impl GridNavigator {
+    /// A navigator with the given registry name, rover and parameters.
+    pub fn new(name: &'static str, rover: RoverConfig, config: GridNavigatorConfig) -> Self {
+        let planner = planner_by_name(config.planner).expect("navigator registry names a known planner");
+        Self {
+            name,
+            rover,
+            config,
+            terrain: None,
+            planner,
+            waypoints: VecDeque::new(),
+            plan: Vec::new(),
+            stats: NavigatorStats::default(),
+            finish: None,
+            look_bearing: None,
+            best_distance: f64::INFINITY,
+            cycles_without_progress: 0,
+            blocked_senses: 0,
+            backing_out: false,
+            last_command: LastCommand::Other,
+        }
+    }
+
+    fn cost_mode(&self) -> CostMode {
+        if self.config.planner == "dstar-lite" { CostMode::Traversability } else { CostMode::Optimistic }
+    }
+
+    fn init_map(&mut self, from: Point2, goal: Point2) {
+        let m = self.config.map_margin;
+        let res = self.config.map_resolution;
+        let x0 = from.x.min(goal.x) - m;
+        let y0 = from.y.min(goal.y) - m;
+        let cols = ((from.x.max(goal.x) + m - x0) / res).ceil() as usize;
+        let rows = ((from.y.max(goal.y) + m - y0) / res).ceil() as usize;
+        let geometry = GridGeometry { cols, rows, resolution: res, origin_x: x0, origin_y: y0 };
+        self.terrain = Some(TerrainModel::new(&self.rover, geometry, self.config.safety_buffer));
+    }
+
+    /// Plans from the estimate to the goal and queues the waypoints of the sensed, safe prefix.
+    fn replan(&mut self, from: Point2, goal: Point2) {
+        self.waypoints.clear();
+        let terrain = self.terrain.as_ref().expect("map initialised before planning");
+        let grid = terrain.cost_grid(self.cost_mode(), from);
+        let g = grid.geometry();
+        let to_cell = |p: Point2| -> Option<Cell> { g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c)) };
+        let (Some(start), Some(goal_cell)) = (to_cell(from), to_cell(goal)) else {
+            self.finish = Some((Outcome::Unreachable, "goal or rover outside the navigation map".into()));
+            return;
+        };
+        self.planner.set_grid(grid);
+        self.stats.plans += 1;
+        let plan = match self.planner.plan(start, goal_cell) {
+            Ok(plan) => plan,
+            Err(PlanError::NoPath { .. }) => {
+                self.finish = Some((
+                    Outcome::Unreachable,
+                    "no path to the goal through known-safe and unknown terrain".into(),
+                ));
+                return;
+            }
+            Err(e) => {
+                self.finish = Some((Outcome::Aborted, format!("planner failed: {e}")));
+                return;
+            }
+        };
+        let grid = self.planner.grid().expect("grid set above");
+        let mut world: Vec<Point2> = plan.points.iter().map(|p| grid.grid_to_world(*p)).collect();
+        if let Some(first) = world.first_mut() {
+            *first = from;
+        }
+        if let Some(last) = world.last_mut() {
+            *last = goal;
+        }
+        self.plan = world.clone();
+
+        // Walk the path while it stays in sensed, hazard-free terrain, up to the step length.
+        let terrain = self.terrain.as_ref().expect("map initialised");
+        let mut prefix = vec![from];
+        let mut travelled = 0.0;
+        let step = 0.05;
+        let mut stop_point = None;
+        'walk: for w in world.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let len = a.dist(b);
+            let n = (len / step).ceil().max(1.0) as usize;
+            for i in 1..=n {
+                let p = a.add(b.sub(a).scale(i as f64 / n as f64));
+                let near_rover = p.dist(from) < 0.5;
+                if !near_rover && !terrain.is_known_safe(p) {
+                    stop_point = Some(p);
+                    break 'walk;
+                }
+                travelled += len / n as f64;
+                if travelled >= self.config.max_step {
+                    prefix.push(p);
+                    break 'walk;
+                }
+            }
+            prefix.push(b);
+        }
+        // Look where the plan leaves sensed terrain (or toward the goal).
+        let look_at = stop_point.unwrap_or(goal);
+        self.look_bearing = Some(look_at.sub(from).angle());
+        let prefix = simplify(&prefix, 0.03);
+        let length: f64 = prefix.windows(2).map(|w| w[0].dist(w[1])).sum();
+        if length < 0.15 {
+            return;
+        }
+        self.waypoints.extend(prefix.into_iter().skip(1));
+    }
+
+    fn sense(&mut self, heading: f64, bearing: f64) -> NavCommand {
+        let centre = angle_diff(bearing, heading);
+        let mut requests: Vec<SenseRequest> =
+            self.config.mast_fan.iter().map(|d| SenseRequest::Mast { pan: centre + d }).collect();
+        requests.push(SenseRequest::BodyFront);
+        self.stats.sensing_actions += requests.len() as u64;
+        NavCommand::Sense(requests)
+    }
+}
+
+/// Drops points that lie within `tolerance` of the chord between their neighbours
+/// (Douglas-Peucker), so that the segment driver sees straight segments.
+fn simplify(points: &[Point2], tolerance: f64) -> Vec<Point2> {
+    if points.len() < 3 {
+        return points.to_vec();
+    }
+    let (a, b) = (points[0], points[points.len() - 1]);
+    let chord = b.sub(a);
+    let len = chord.norm();
+    let (mut worst, mut index) = (0.0, 0);
+    for (i, p) in points.iter().enumerate().take(points.len() - 1).skip(1) {
+        let d = if len > 1e-9 { chord.cross(p.sub(a)).abs() / len } else { p.dist(a) };
+        if d > worst {
+            worst = d;
+            index = i;
+        }
+    }
+    if worst <= tolerance {
+        return vec![a, b];
+    }
+    let mut left = simplify(&points[..=index], tolerance);
+    let right = simplify(&points[index..], tolerance);
+    left.pop();
+    left.extend(right);
+    left
+}
+
+impl Navigator for GridNavigator {
+    fn name(&self) -> &str {
+        self.name
+    }
+
+    fn step(&mut self, input: &NavInput<'_>) -> NavCommand {
+        let est = input.estimate.pose;
+        let here = Point2::new(est.x, est.y);
+        let goal = input.goal.position;
+        if self.terrain.is_none() {
+            self.init_map(here, goal);
+        }
+        if let Some((outcome, why)) = self.finish.clone() {
+            return NavCommand::Finish(outcome, why);
+        }
+        if here.dist(goal) <= input.goal.tolerance {
+            return NavCommand::Finish(
+                Outcome::Reached,
+                format!("within {:.2} m of the goal", here.dist(goal)),
+            );
+        }
+        if let Some(why) = &input.frame.motion_stopped {
+            self.waypoints.clear();
+            if why.starts_with("hazard") && !self.backing_out {
+                // Remember where the body met the terrain: ahead of the rover for a forward
+                // drive, behind it when reversing, under the leading corners when turning.
+                let ahead = |d: f64, side: f64| {
+                    est.pose2()
+                        .transform(Point2::new(d * 0.5 * self.rover.length, side * 0.5 * self.rover.width))
+                };
+                let terrain = self.terrain.as_mut().expect("map initialised");
+                match self.last_command {
+                    LastCommand::Forward => terrain.mark_contact(ahead(1.0, 0.0)),
+                    LastCommand::Reverse => terrain.mark_contact(ahead(-1.0, 0.0)),
+                    LastCommand::Turn(sign) => {
+                        terrain.mark_contact(ahead(1.0, sign));
+                        terrain.mark_contact(ahead(-1.0, -sign));
+                    }
+                    LastCommand::Other => {}
+                }
+                // Back away from whatever the body met, then look again.
+                self.backing_out = true;
+                self.last_command = LastCommand::Reverse;
+                return NavCommand::Drive { distance: -0.3, curvature: 0.0, guard: DriveGuard::default() };
+            }
+        }
+        self.backing_out = false;
+        if !input.frame.clouds.is_empty() {
+            self.terrain.as_mut().expect("map initialised").ingest(&input.frame.clouds, &input.estimate);
+            self.replan(here, goal);
+            if let Some((outcome, why)) = self.finish.clone() {
+                return NavCommand::Finish(outcome, why);
+            }
+            let d = here.dist(goal);
+            if d < self.best_distance - 0.1 {
+                self.best_distance = d;
+                self.cycles_without_progress = 0;
+            } else {
+                self.cycles_without_progress += 1;
+                if self.cycles_without_progress > self.config.patience {
+                    self.finish = Some((
+                        Outcome::HelpRequested,
+                        format!("no progress toward the goal in {} planning cycles", self.config.patience),
+                    ));
+                    return NavCommand::Finish(Outcome::HelpRequested, self.finish.clone().unwrap().1);
+                }
+            }
+            if self.waypoints.is_empty() {
+                self.blocked_senses += 1;
+            } else {
+                self.blocked_senses = 0;
+            }
+        }
+        if let Some(&next) = self.waypoints.front() {
+            let bearing = next.sub(here).angle();
+            let error = angle_diff(bearing, est.yaw);
+            if error.abs() > self.config.turn_threshold {
+                self.last_command = LastCommand::Turn(error.signum());
+                return NavCommand::Turn { angle: error };
+            }
+            self.last_command = LastCommand::Forward;
+            self.waypoints.pop_front();
+            let chord = here.dist(next);
+            // The arc through `next` that starts along the current heading.
+            let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
+            let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
+            return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
+        }
+        let bearing = self.look_bearing.unwrap_or_else(|| goal.sub(here).angle());
+        // When repeated looks in one direction reveal nothing drivable, widen the search.
+        let bearing =
+            bearing + [0.0, 1.2, -1.2, 2.4, -2.4, 3.14][(self.blocked_senses.saturating_sub(1) as usize) % 6];
+        self.last_command = LastCommand::Other;
+        self.sense(est.yaw, bearing)
+    }
+
+    fn planned_path(&self) -> Vec<Point2> {
+        self.plan.clone()
+    }
+
+    fn overlays(&self) -> Vec<Overlay> {
+        self.terrain
+            .as_ref()
+            .map(|t| {
+                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
+            })
+            .unwrap_or_default()
+    }
+
+    fn stats(&self) -> NavigatorStats {
+        self.stats.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn simplify_keeps_corners_and_drops_collinear_points() {
+        let pts: Vec<Point2> = (0..=10)
+            .map(|i| Point2::new(i as f64 * 0.1, 0.0))
+            .chain((1..=10).map(|i| Point2::new(1.0, i as f64 * 0.1)))
+            .collect();
+        let s = simplify(&pts, 0.01);
+        assert_eq!(s.len(), 3);
+        assert!(s[1].dist(Point2::new(1.0, 0.0)) < 1e-9);
+    }
+}

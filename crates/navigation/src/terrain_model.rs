@@ -1,0 +1,195 @@
+//! The navigator's view of the terrain: the MRPTA terrain evaluator (robot-centred T-grid) fused
+//! into a world map, plus a world-aligned hazard layer grown into configuration space for
+//! planning (paper 000 section 2: obstacles grown by the rover size and a safety buffer).
+
+use rovernav_core::{Grid2, GridGeometry, Point2, PointCloud, PoseEstimate, RoverConfig};
+use rovernav_mapping::WorldMap;
+use rovernav_perception::{TerrainConfig, TerrainEvaluator};
+use rovernav_planning::{Cell, CostGrid};
+
+/// Fraction of the rover's clearance and tilt limits at which terrain counts as a hazard.
+pub const HAZARD_MARGIN: f64 = 0.8;
+
+/// Cost per metre of leaving a grown hazard the rover finds itself in.
+const ESCAPE_COST: f32 = 50.0;
+
+/// How unknown and sensed cells are costed for the planner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CostMode {
+    /// Every cell outside grown hazards costs 1, sensed or not (freespace assumption).
+    Optimistic,
+    /// MRPTA traversability costs, unsensed cells neutral (paper 004 section 3.5).
+    Traversability,
+}
+
+/// Sensed terrain in world coordinates.
+pub struct TerrainModel {
+    evaluator: TerrainEvaluator,
+    world: WorldMap,
+    /// Obstacle cells of the step/slope model, latest observation wins.
+    hazard: Grid2<bool>,
+    /// Cells whose hazard state has been assessed.
+    assessed: Grid2<bool>,
+    /// Hazards grown by the rover radius plus buffer (recomputed after each ingest).
+    grown: Grid2<bool>,
+    growth: f64,
+    config: TerrainConfig,
+}
+
+impl TerrainModel {
+    /// An empty model over `geometry` for a rover.
+    pub fn new(rover: &RoverConfig, geometry: GridGeometry, safety_buffer: f64) -> Self {
+        // Hazard limits sit below the rover's true limits: range noise and the wheels settling
+        // into relief can turn a rock that measures exactly the clearance into belly contact.
+        let config = TerrainConfig {
+            safety_buffer,
+            clearance: rover.clearance * HAZARD_MARGIN,
+            max_tilt: rover.max_tilt * HAZARD_MARGIN,
+            ..TerrainConfig::for_rover(rover)
+        };
+        let (cx, cy) =
+            (geometry.origin_x + geometry.width_m() / 2.0, geometry.origin_y + geometry.height_m() / 2.0);
+        let evaluator = TerrainEvaluator::new(config.clone(), rovernav_core::Pose2::new(cx, cy, 0.0))
+            .expect("terrain configuration derived from a valid rover");
+        Self {
+            evaluator,
+            world: WorldMap::unknown(geometry).expect("non-empty navigation map"),
+            hazard: Grid2::filled(geometry, false),
+            assessed: Grid2::filled(geometry, false),
+            grown: Grid2::filled(geometry, false),
+            growth: config.growth(),
+            config,
+        }
+    }
+
+    /// The fused world map.
+    pub fn world(&self) -> &WorldMap {
+        &self.world
+    }
+
+    /// Folds range data into the maps, placed with the pose estimate.
+    pub fn ingest(&mut self, clouds: &[PointCloud], estimate: &PoseEstimate) {
+        let layers = self.evaluator.update(clouds, estimate);
+        // A fusion error can only come from inconsistent layer sizes, which the evaluator
+        // never produces; skipping the fusion keeps the navigator running on older data.
+        let _ = self.world.fuse(&layers.map, estimate);
+        let lg = layers.geometry();
+        let wg = self.hazard.geometry;
+        // Sample the local assessment under every world cell it covers.
+        let x0 = lg.origin_x.max(wg.origin_x);
+        let y0 = lg.origin_y.max(wg.origin_y);
+        let x1 = (lg.origin_x + lg.width_m()).min(wg.origin_x + wg.width_m());
+        let y1 = (lg.origin_y + lg.height_m()).min(wg.origin_y + wg.height_m());
+        if x1 <= x0 || y1 <= y0 {
+            return;
+        }
+        let (Some((c0, r0)), Some((c1, r1))) = (wg.cell_of(x0, y0), wg.cell_of(x1 - 1e-9, y1 - 1e-9)) else {
+            return;
+        };
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let (x, y) = wg.center(c, r);
+                let Some((lc, lr)) = lg.cell_of(x, y) else { continue };
+                let i = lg.index(lc, lr);
+                if layers.step.data[i].is_finite() || layers.hazard.data[i] {
+                    *self.assessed.get_mut(c, r) = true;
+                    *self.hazard.get_mut(c, r) = layers.hazard.data[i];
+                }
+            }
+        }
+        self.grow_hazards();
+    }
+
+    fn grow_hazards(&mut self) {
+        let g = self.hazard.geometry;
+        let reach = (self.growth / g.resolution).ceil() as isize;
+        let r2 = (self.growth / g.resolution).powi(2);
+        let offsets: Vec<(isize, isize)> = (-reach..=reach)
+            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+            .filter(|&(dr, dc)| ((dr * dr + dc * dc) as f64) <= r2 + 0.5)
+            .collect();
+        self.grown.data.iter_mut().for_each(|v| *v = false);
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                if !*self.hazard.get(c, r) {
+                    continue;
+                }
+                for &(dr, dc) in &offsets {
+                    let (rr, cc) = (r as isize + dr, c as isize + dc);
+                    if rr >= 0 && cc >= 0 && (rr as usize) < g.rows && (cc as usize) < g.cols {
+                        *self.grown.get_mut(cc as usize, rr as usize) = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Records an obstacle the body met but perception missed (a hazard contact), so the
+    /// planner never drives into it again.
+    pub fn mark_contact(&mut self, p: Point2) {
+        let g = self.hazard.geometry;
+        let reach = 0.1;
+        let steps = (reach / g.resolution).ceil() as isize;
+        for dr in -steps..=steps {
+            for dc in -steps..=steps {
+                let q = Point2::new(p.x + dc as f64 * g.resolution, p.y + dr as f64 * g.resolution);
+                if q.dist(p) <= reach
+                    && let Some((c, r)) = g.cell_of(q.x, q.y)
+                {
+                    *self.hazard.get_mut(c, r) = true;
+                    *self.assessed.get_mut(c, r) = true;
+                }
+            }
+        }
+        self.grow_hazards();
+    }
+
+    /// Whether a point is in assessed terrain and outside every grown hazard.
+    pub fn is_known_safe(&self, p: Point2) -> bool {
+        match self.hazard.geometry.cell_of(p.x, p.y) {
+            Some((c, r)) => *self.assessed.get(c, r) && !*self.grown.get(c, r),
+            None => false,
+        }
+    }
+
+    /// Whether a point lies in a grown hazard.
+    pub fn is_grown_hazard(&self, p: Point2) -> bool {
+        self.hazard.geometry.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.grown.get(c, r))
+    }
+
+    /// The planning grid. Cells within the rover's own footprint are never blocked, so a rover
+    /// that finds itself inside a grown hazard (noise, or a late detection) can still plan out.
+    pub fn cost_grid(&self, mode: CostMode, rover: Point2) -> CostGrid {
+        let g = self.hazard.geometry;
+        let mut grid = match mode {
+            CostMode::Optimistic => CostGrid::uniform(g.rows, g.cols, 1.0).expect("non-empty grid"),
+            CostMode::Traversability => CostGrid::from_traversability(self.world.traversability()),
+        };
+        grid.set_geometry(g);
+        // A rover that finds itself inside grown hazards (noise, or a late detection) may leave
+        // through them at a high cost, but never through an obstacle cell itself.
+        let escape_radius = self.growth + g.resolution;
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                let cell = Cell::new(r, c);
+                if *self.grown.get(c, r) {
+                    let (x, y) = g.center(c, r);
+                    let escapable = !*self.hazard.get(c, r) && Point2::new(x, y).dist(rover) <= escape_radius;
+                    let _ = grid.set_cost(cell, if escapable { ESCAPE_COST } else { f32::INFINITY });
+                }
+                if mode == CostMode::Optimistic {
+                    grid.set_sensed(cell, *self.assessed.get(c, r));
+                }
+            }
+        }
+        grid
+    }
+
+    /// Outlines of the grown hazards, as convex C-obstacles, for display.
+    pub fn hazard_outlines(&self) -> Vec<Vec<Point2>> {
+        rovernav_perception::cobstacle::build_c_obstacles(&self.hazard, self.growth, self.config.max_arc_step)
+            .into_iter()
+            .map(|o| o.vertices)
+            .collect()
+    }
+}

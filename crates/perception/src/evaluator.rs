@@ -1,0 +1,274 @@
+//! The terrain evaluator (paper 004 section 3.3): range data into a robot-centred toroidal grid
+//! (T-grid), assessed into elevation, hazard, traversability and goodness layers, with requests
+//! for more data when the point density in front of the rover is too low.
+//!
+//! Each update recentres the T-grid on the pose estimate (cells falling off the grid are cleared,
+//! nothing is copied), bins the new points into the cells' running sums, and reassesses the
+//! whole window with flat arrays: per-cell statistics, the footprint step/slope model, MRPTA
+//! traversability and GESTALT goodness.
+
+use crate::PerceptionError;
+use crate::cell::CellStats;
+use crate::cobstacle::{CObstacle, SensedWedge, build_c_obstacles, label_c_obstacles};
+use crate::config::TerrainConfig;
+use crate::elevation::world_points;
+use crate::footprint::analyse_footprints;
+use crate::goodness::goodness_layer;
+use crate::traversability::traversability_layer;
+use rovernav_core::{
+    CameraKind, Grid2, GridGeometry, Point2, PointCloud, Pose2, Pose3, PoseEstimate, SenseRequest, angle_diff,
+};
+use rovernav_mapping::{LocalMap, RollingGrid};
+
+/// The assessed layers of one window, all on the same world-aligned geometry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainLayers {
+    /// Elevation, variance, point count, traversability and goodness: what the map manager fuses.
+    pub map: LocalMap,
+    /// Obstacle cells of the step/slope model (the hazard classification).
+    pub hazard: Grid2<bool>,
+    /// Step within the footprint window centred on each cell (m; NaN not assessed).
+    pub step: Grid2<f32>,
+    /// Slope of the footprint plane centred on each cell (rad; NaN not assessed).
+    pub slope: Grid2<f32>,
+    /// Roughness about the footprint plane centred on each cell (m; NaN not assessed).
+    pub roughness: Grid2<f32>,
+}
+
+impl TerrainLayers {
+    /// Placement of the layers.
+    pub fn geometry(&self) -> GridGeometry {
+        self.map.elevation.geometry
+    }
+
+    /// Layers of a window where nothing is sensed.
+    pub fn unknown(geometry: GridGeometry, reference: Pose2) -> Self {
+        Self {
+            map: LocalMap {
+                reference,
+                elevation: Grid2::filled(geometry, f32::NAN),
+                variance: Grid2::filled(geometry, f32::NAN),
+                point_count: Grid2::filled(geometry, 0),
+                traversability: Grid2::filled(geometry, 0),
+                goodness: Grid2::filled(geometry, f32::NAN),
+            },
+            hazard: Grid2::filled(geometry, false),
+            step: Grid2::filled(geometry, f32::NAN),
+            slope: Grid2::filled(geometry, f32::NAN),
+            roughness: Grid2::filled(geometry, f32::NAN),
+        }
+    }
+
+    /// C-obstacles of the hazard cells, grown by rover radius + safety buffer and labelled.
+    pub fn c_obstacles(
+        &self,
+        config: &TerrainConfig,
+        sensed: &[SensedWedge],
+        goal: Option<Point2>,
+    ) -> Vec<CObstacle> {
+        let mut obstacles = build_c_obstacles(&self.hazard, config.growth(), config.max_arc_step);
+        label_c_obstacles(&mut obstacles, sensed, goal);
+        obstacles
+    }
+}
+
+/// Assesses a window of cell statistics given in row-major order (row 0 south).
+///
+/// `centre` is the grid cell of the rover (the T-grid centre, for the neighbourhood estimate)
+/// and `reference` the pose estimate the points were placed with.
+pub fn assess_cells<'a>(
+    geometry: GridGeometry,
+    cells: impl Iterator<Item = &'a CellStats>,
+    centre: (usize, usize),
+    reference: Pose2,
+    config: &TerrainConfig,
+) -> TerrainLayers {
+    let n = geometry.len();
+    let min_points = config.min_points_per_cell.max(1);
+    // Cells with too few points count as unsensed throughout.
+    let mut stats: Vec<CellStats> =
+        cells.take(n).map(|c| if c.count >= min_points { *c } else { CellStats::EMPTY }).collect();
+    stats.resize(n, CellStats::EMPTY);
+    let heights: Vec<f32> = stats.iter().map(|c| c.mean().map_or(f32::NAN, |m| m as f32)).collect();
+    let variance: Vec<f32> = stats.iter().map(|c| c.variance().map_or(f32::NAN, |v| v as f32)).collect();
+    let counts: Vec<u32> = stats.iter().map(|c| c.count).collect();
+
+    let (cols, rows, res) = (geometry.cols, geometry.rows, geometry.resolution);
+    let footprint = analyse_footprints(&heights, cols, rows, res, &config.footprint_params());
+    let traversability =
+        traversability_layer(&stats, &heights, cols, rows, res, centre, &config.traversability_params());
+    let goodness = goodness_layer(&heights, &footprint, &config.goodness_params());
+    let grid = |data| Grid2 { geometry, data };
+    TerrainLayers {
+        map: LocalMap {
+            reference,
+            elevation: grid(heights),
+            variance: grid(variance),
+            point_count: Grid2 { geometry, data: counts },
+            traversability: Grid2 { geometry, data: traversability },
+            goodness: grid(goodness),
+        },
+        hazard: Grid2 { geometry, data: footprint.obstacle },
+        step: grid(footprint.step),
+        slope: grid(footprint.slope),
+        roughness: grid(footprint.roughness),
+    }
+}
+
+/// A request for more range data: the sparsest sector in front of the rover is below the
+/// configured density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoreDataRequest {
+    /// Bearing of the sector centre in the body frame (rad, counter-clockwise from forward).
+    pub bearing: f64,
+    /// The same bearing in the world frame (rad, counter-clockwise from east).
+    pub world_bearing: f64,
+    /// Measured density in the sector (points per m^2).
+    pub density: f64,
+    /// Configured minimum (points per m^2).
+    pub required: f64,
+}
+
+impl MoreDataRequest {
+    /// The sensing command that images this bearing with the given sensor.
+    pub fn sense_request(&self, sensor: CameraKind) -> SenseRequest {
+        match sensor {
+            CameraKind::Mast => SenseRequest::Mast { pan: self.bearing },
+            CameraKind::Lidar => SenseRequest::Lidar { pan: self.bearing },
+            CameraKind::BodyFront => SenseRequest::BodyFront,
+            CameraKind::BodyRear => SenseRequest::BodyRear,
+        }
+    }
+}
+
+/// The MRPTA terrain evaluator: a T-grid of cell statistics that follows the rover.
+#[derive(Clone, Debug)]
+pub struct TerrainEvaluator {
+    config: TerrainConfig,
+    grid: RollingGrid<CellStats>,
+    layers: TerrainLayers,
+}
+
+impl TerrainEvaluator {
+    /// An evaluator with an empty T-grid centred on `start`.
+    pub fn new(config: TerrainConfig, start: Pose2) -> Result<Self, PerceptionError> {
+        config.validate()?;
+        let grid = RollingGrid::new(
+            config.cols,
+            config.rows,
+            config.resolution,
+            CellStats::EMPTY,
+            start.position(),
+        )?;
+        let layers = TerrainLayers::unknown(grid.geometry(), start);
+        Ok(Self { config, grid, layers })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TerrainConfig {
+        &self.config
+    }
+
+    /// The T-grid of cell statistics.
+    pub fn grid(&self) -> &RollingGrid<CellStats> {
+        &self.grid
+    }
+
+    /// The layers of the last assessment.
+    pub fn layers(&self) -> &TerrainLayers {
+        &self.layers
+    }
+
+    /// Moves the T-grid so the rover is in its central cell (cells falling off are cleared).
+    pub fn recenter(&mut self, position: Point2) {
+        self.grid.recenter(position);
+    }
+
+    /// Bins a body-frame cloud placed with the pose estimate `pose`; returns the points kept.
+    pub fn insert_cloud(&mut self, cloud: &PointCloud, pose: &Pose3) -> usize {
+        let mut kept = 0;
+        for p in world_points(cloud, pose) {
+            if let Some((slot, centre)) = self.grid.locate(p[0], p[1]) {
+                self.grid.slot_mut(slot).add(p[0] - centre.x, p[1] - centre.y, p[2]);
+                kept += 1;
+            }
+        }
+        kept
+    }
+
+    /// Reassesses the whole window; `reference` is the pose estimate the data was placed with.
+    pub fn assess(&mut self, reference: Pose2) -> &TerrainLayers {
+        let centre = (self.grid.cols() / 2, self.grid.rows() / 2);
+        self.layers =
+            assess_cells(self.grid.geometry(), self.grid.iter_window(), centre, reference, &self.config);
+        &self.layers
+    }
+
+    /// One full update: recentre on the estimate, bin the clouds, reassess.
+    pub fn update(&mut self, clouds: &[PointCloud], estimate: &PoseEstimate) -> &TerrainLayers {
+        let pose = estimate.pose;
+        self.recenter(Point2::new(pose.x, pose.y));
+        for cloud in clouds {
+            self.insert_cloud(cloud, &pose);
+        }
+        self.assess(pose.pose2())
+    }
+
+    /// `(body bearing, points per m^2)` of each sector in front of `pose`, from the right-most
+    /// sector (most negative bearing) to the left-most.
+    pub fn sector_densities(&self, pose: Pose2) -> Vec<(f64, f64)> {
+        let d = &self.config.density;
+        let sectors = d.sectors.max(1);
+        let width = 2.0 * d.half_angle / sectors as f64;
+        let mut points = vec![0u64; sectors];
+        let mut cells = vec![0u64; sectors];
+        let res = self.grid.resolution();
+        let reach = (d.far / res).ceil() as i64 + 1;
+        let Some((cc, cr)) = self.grid.cell_of(pose.x, pose.y) else {
+            return Vec::new();
+        };
+        let (cols, rows) = (self.grid.cols() as i64, self.grid.rows() as i64);
+        for r in (cr as i64 - reach).max(0)..(cr as i64 + reach + 1).min(rows) {
+            for c in (cc as i64 - reach).max(0)..(cc as i64 + reach + 1).min(cols) {
+                let p = self.grid.center(c as usize, r as usize);
+                let v = p.sub(pose.position());
+                let dist = v.norm();
+                if dist < d.near || dist > d.far {
+                    continue;
+                }
+                let rel = angle_diff(v.angle(), pose.yaw);
+                if rel.abs() > d.half_angle {
+                    continue;
+                }
+                let k = (((rel + d.half_angle) / width) as usize).min(sectors - 1);
+                cells[k] += 1;
+                points[k] += self.grid.get(c as usize, r as usize).count as u64;
+            }
+        }
+        (0..sectors)
+            .map(|k| {
+                let bearing = -d.half_angle + (k as f64 + 0.5) * width;
+                let area = cells[k] as f64 * res * res;
+                let density = if area > 0.0 { points[k] as f64 / area } else { 0.0 };
+                (bearing, density)
+            })
+            .collect()
+    }
+
+    /// Asks for more data at the bearing of the sparsest sector in front of the rover when its
+    /// point density is below the configured minimum; `None` when coverage is sufficient.
+    pub fn density_request(&self, pose: Pose2) -> Option<MoreDataRequest> {
+        let required = self.config.density.min_points_per_m2;
+        self.sector_densities(pose)
+            .into_iter()
+            .filter(|&(_, density)| density < required)
+            // Sparsest first; among equals, the one nearest straight ahead.
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.abs().total_cmp(&b.0.abs())))
+            .map(|(bearing, density)| MoreDataRequest {
+                bearing,
+                world_bearing: rovernav_core::wrap_angle(pose.yaw + bearing),
+                density,
+                required,
+            })
+    }
+}

@@ -1,0 +1,118 @@
+//! D* Lite (S. Koenig and M. Likhachev, "D* Lite", AAAI 2002; optimised version, their
+//! figure 4) on the 8-connected cell-centre graph: the incremental planner MRPTA's path planning
+//! is based on (paper 004, section 3.5), replanning after map updates and rover motion by
+//! repairing only the affected part of a backward search from the goal.
+//!
+//! Edge costs are those of [`crate::AStar`] on cell centres (mean of the two cells' costs times
+//! the step length, no corner cutting), so both give the same optimal costs.
+
+use crate::incremental::{Engine, Model};
+use crate::lattice::Lattice;
+use crate::{Cell, CellChange, CostGrid, GlobalPlanner, GraphKind, Plan, PlanError};
+use rovernav_core::Point2;
+
+/// Graph model: rhs(s) = min over neighbours s' of c(s, s') + g(s').
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CentreGraph;
+
+impl Model for CentreGraph {
+    const NAME: &'static str = "dstar-lite";
+    const GRAPH: GraphKind = GraphKind::CellCentres;
+
+    #[inline]
+    fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64 {
+        (0..8).map(|k| Self::via(lat, g, s, k)).fold(f64::INFINITY, f64::min)
+    }
+
+    #[inline]
+    fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64 {
+        let gn = g[lat.step(s, k)];
+        if gn.is_infinite() { f64::INFINITY } else { lat.edge(s, k) + gn }
+    }
+
+    #[inline]
+    fn h(lat: &Lattice, a: usize, b: usize) -> f64 {
+        lat.octile(a, b)
+    }
+
+    fn extract(
+        lat: &Lattice,
+        _grid: &CostGrid,
+        g: &[f64],
+        start: usize,
+        goal: usize,
+    ) -> Option<(Vec<Point2>, f64)> {
+        descend(lat, g, start, goal)
+    }
+}
+
+/// Follows the values `g` downhill from `start` to `goal` on a graph: each step takes the
+/// neighbour minimising edge cost plus g. Returns the node points and the summed edge cost.
+pub(crate) fn descend(lat: &Lattice, g: &[f64], start: usize, goal: usize) -> Option<(Vec<Point2>, f64)> {
+    let mut points = vec![lat.point(start)];
+    let mut cost = 0.0;
+    let mut s = start;
+    let mut steps = 0;
+    while s != goal {
+        let (mut best, mut best_k) = (f64::INFINITY, 8);
+        for k in 0..8 {
+            let n = lat.step(s, k);
+            if !lat.valid[n] {
+                continue;
+            }
+            let v = lat.edge(s, k) + g[n];
+            if v < best {
+                best = v;
+                best_k = k;
+            }
+        }
+        steps += 1;
+        if best_k == 8 || !best.is_finite() || steps > lat.len() {
+            return None;
+        }
+        cost += lat.edge(s, best_k);
+        s = lat.step(s, best_k);
+        points.push(lat.point(s));
+    }
+    Some((points, cost))
+}
+
+/// The D* Lite planner on cell centres.
+#[derive(Clone, Debug, Default)]
+pub struct DStarLite {
+    engine: Engine<CentreGraph>,
+}
+
+impl DStarLite {
+    /// A planner without a grid.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl GlobalPlanner for DStarLite {
+    fn name(&self) -> &'static str {
+        CentreGraph::NAME
+    }
+    fn graph(&self) -> GraphKind {
+        CentreGraph::GRAPH
+    }
+    fn set_grid(&mut self, grid: CostGrid) {
+        self.engine.set_grid(grid);
+    }
+    fn grid(&self) -> Option<&CostGrid> {
+        self.engine.grid()
+    }
+    fn plan(&mut self, start: Cell, goal: Cell) -> Result<Plan, PlanError> {
+        self.engine.plan(start, goal)
+    }
+    fn update_cells(&mut self, changes: &[CellChange]) -> Result<(), PlanError> {
+        self.engine.update_cells(changes)
+    }
+    fn move_start(&mut self, start: Cell) -> Result<(), PlanError> {
+        self.engine.move_start(start)
+    }
+    fn replan(&mut self) -> Result<Plan, PlanError> {
+        self.engine.replan()
+    }
+}

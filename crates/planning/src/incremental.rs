@@ -1,0 +1,341 @@
+//! The incremental search engine shared by D* Lite and Field D*: Koenig and Likhachev's
+//! optimised D* Lite (backward search from the goal, `rhs` one-step lookahead values, priority
+//! keys `[min(g, rhs) + h(start, s) + km, min(g, rhs)]`, `km` grown by the heuristic distance the
+//! start moved). What differs between the two planners is how a node's `rhs` is computed from
+//! its neighbours, which a [`Model`] supplies.
+
+use crate::heap::{IndexedHeap, Key};
+use crate::lattice::Lattice;
+use crate::{Cell, CellChange, CostGrid, GraphKind, Plan, PlanError};
+use rovernav_core::Point2;
+
+/// How node values are computed from neighbours on one graph.
+pub(crate) trait Model {
+    /// Registry name of the planner.
+    const NAME: &'static str;
+    /// The graph searched.
+    const GRAPH: GraphKind;
+    /// The one-step lookahead value of node `s` (not the goal) from all its neighbours.
+    fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64;
+    /// The value of `s` through the neighbour in direction `k` only (after that neighbour's g
+    /// decreased, `rhs(s) = min(rhs(s), via)` keeps `rhs` exact).
+    fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64;
+    /// Consistent lower bound on the cost between two nodes.
+    fn h(lat: &Lattice, a: usize, b: usize) -> f64;
+    /// The path from start to goal following the values `g`: points in grid units and the
+    /// polyline's cost, or `None` when it cannot be followed.
+    fn extract(
+        lat: &Lattice,
+        grid: &CostGrid,
+        g: &[f64],
+        start: usize,
+        goal: usize,
+    ) -> Option<(Vec<Point2>, f64)>;
+}
+
+/// Relative size of value changes treated as rounding noise. Field D*'s interpolated values
+/// of neighbouring nodes depend on each other, so without a tolerance a pair of nodes can keep
+/// lowering each other by a few ulps.
+const REL_TOL: f64 = 1e-12;
+
+/// Whether `new` is lower than `old` by more than rounding noise.
+#[inline]
+fn improves(new: f64, old: f64) -> bool {
+    new < old - REL_TOL * (1.0 + new.abs())
+}
+
+#[inline]
+fn key_less(a: Key, b: Key) -> bool {
+    a[0] < b[0] || (a[0] == b[0] && a[1] < b[1])
+}
+
+/// D* Lite search state over one model.
+#[derive(Clone, Debug)]
+pub(crate) struct Engine<M: Model> {
+    grid: Option<CostGrid>,
+    lat: Option<Lattice>,
+    g: Vec<f64>,
+    rhs: Vec<f64>,
+    heap: IndexedHeap,
+    touched: Vec<bool>,
+    touched_list: Vec<u32>,
+    mark: Vec<bool>,
+    start: usize,
+    goal: usize,
+    last_start: usize,
+    km: f64,
+    searching: bool,
+    expansions: usize,
+    _model: std::marker::PhantomData<M>,
+}
+
+impl<M: Model> Default for Engine<M> {
+    fn default() -> Self {
+        Self {
+            grid: None,
+            lat: None,
+            g: Vec::new(),
+            rhs: Vec::new(),
+            heap: IndexedHeap::new(0),
+            touched: Vec::new(),
+            touched_list: Vec::new(),
+            mark: Vec::new(),
+            start: 0,
+            goal: 0,
+            last_start: 0,
+            km: 0.0,
+            searching: false,
+            expansions: 0,
+            _model: std::marker::PhantomData,
+        }
+    }
+}
+
+impl<M: Model> Engine<M> {
+    /// Replaces the grid and drops the search.
+    pub fn set_grid(&mut self, grid: CostGrid) {
+        let lat = Lattice::new(&grid, M::GRAPH);
+        let n = lat.len();
+        self.g = vec![f64::INFINITY; n];
+        self.rhs = vec![f64::INFINITY; n];
+        self.heap = IndexedHeap::new(n);
+        self.touched = vec![false; n];
+        self.touched_list.clear();
+        self.mark = vec![false; n];
+        self.lat = Some(lat);
+        self.grid = Some(grid);
+        self.searching = false;
+    }
+
+    /// The current grid.
+    pub fn grid(&self) -> Option<&CostGrid> {
+        self.grid.as_ref()
+    }
+
+    fn check(&self, what: &'static str, cell: Cell) -> Result<usize, PlanError> {
+        let grid = self.grid.as_ref().ok_or(PlanError::NoGrid)?;
+        if !grid.contains(cell) {
+            return Err(PlanError::OutOfBounds { what, cell, rows: grid.rows(), cols: grid.cols() });
+        }
+        Ok(self.lat.as_ref().map_or(0, |l| l.index(cell)))
+    }
+
+    /// Plans from start to goal, reusing the search when the goal is unchanged.
+    pub fn plan(&mut self, start: Cell, goal: Cell) -> Result<Plan, PlanError> {
+        let s = self.check("start", start)?;
+        let t = self.check("goal", goal)?;
+        if !self.searching || t != self.goal {
+            self.reset_search(s, t);
+        } else if s != self.start {
+            self.move_start_index(s);
+        }
+        self.replan()
+    }
+
+    /// Moves the start without changing the goal.
+    pub fn move_start(&mut self, start: Cell) -> Result<(), PlanError> {
+        let s = self.check("start", start)?;
+        if !self.searching {
+            return Err(PlanError::NoPreviousPlan);
+        }
+        self.move_start_index(s);
+        Ok(())
+    }
+
+    fn move_start_index(&mut self, s: usize) {
+        let lat = self.lat.as_ref().expect("grid set");
+        self.km += M::h(lat, self.last_start, s);
+        self.last_start = s;
+        self.start = s;
+    }
+
+    /// Applies cost changes and re-evaluates the nodes whose edges changed.
+    pub fn update_cells(&mut self, changes: &[CellChange]) -> Result<(), PlanError> {
+        for c in changes {
+            self.check("changed", c.cell)?;
+            if c.cost.is_nan() || c.cost < 1.0 {
+                return Err(PlanError::InvalidCost { cell: c.cell, cost: c.cost });
+            }
+        }
+        let grid = self.grid.as_mut().ok_or(PlanError::NoGrid)?;
+        let lat = self.lat.as_mut().expect("grid set with lattice");
+        let mut affected = Vec::with_capacity(changes.len() * 9);
+        for c in changes {
+            if grid.set_cost(c.cell, c.cost).is_err() {
+                return Err(PlanError::InvalidCost { cell: c.cell, cost: c.cost });
+            }
+            lat.set_cost(c.cell, c.cost);
+            lat.affected_nodes(c.cell, &mut affected);
+        }
+        if !self.searching {
+            return Ok(());
+        }
+        affected.retain(|&n| {
+            let fresh = !self.mark[n];
+            self.mark[n] = true;
+            fresh
+        });
+        for &n in &affected {
+            self.mark[n] = false;
+            if n != self.goal {
+                let lat = self.lat.as_ref().expect("lattice");
+                let v = M::rhs(lat, &self.g, n);
+                self.set_rhs(n, v);
+                self.update_vertex(n);
+            }
+        }
+        Ok(())
+    }
+
+    fn reset_search(&mut self, start: usize, goal: usize) {
+        for &n in &self.touched_list {
+            let n = n as usize;
+            self.g[n] = f64::INFINITY;
+            self.rhs[n] = f64::INFINITY;
+            self.touched[n] = false;
+        }
+        self.touched_list.clear();
+        self.heap.clear();
+        self.start = start;
+        self.last_start = start;
+        self.goal = goal;
+        self.km = 0.0;
+        self.searching = true;
+        self.set_rhs(goal, 0.0);
+        let k = self.key(goal);
+        self.heap.push_or_update(goal, k);
+    }
+
+    #[inline]
+    fn touch(&mut self, n: usize) {
+        if !self.touched[n] {
+            self.touched[n] = true;
+            self.touched_list.push(n as u32);
+        }
+    }
+
+    #[inline]
+    fn set_rhs(&mut self, n: usize, v: f64) {
+        self.touch(n);
+        self.rhs[n] = v;
+    }
+
+    /// g equals rhs up to rounding noise (both infinite counts as equal).
+    #[inline]
+    fn consistent(&self, n: usize) -> bool {
+        let (g, rhs) = (self.g[n], self.rhs[n]);
+        g == rhs || (g - rhs).abs() <= REL_TOL * (1.0 + g.abs().min(rhs.abs()))
+    }
+
+    #[inline]
+    fn key(&self, n: usize) -> Key {
+        let lat = self.lat.as_ref().expect("lattice");
+        let m = self.g[n].min(self.rhs[n]);
+        [m + M::h(lat, self.start, n) + self.km, m]
+    }
+
+    #[inline]
+    fn update_vertex(&mut self, n: usize) {
+        if !self.consistent(n) {
+            let k = self.key(n);
+            self.heap.push_or_update(n, k);
+        } else {
+            self.heap.remove(n);
+        }
+    }
+
+    /// Searches until the start is consistent and no queued key is below its key.
+    fn compute_shortest_path(&mut self) {
+        loop {
+            let top = self.heap.top_key();
+            let start_key = self.key(self.start);
+            let start_consistent = self.consistent(self.start);
+            let done = !key_less(top, start_key) && start_consistent;
+            if done || self.heap.len() == 0 {
+                break;
+            }
+            let Some((k_old, u)) = self.heap.pop() else {
+                break;
+            };
+            let k_new = self.key(u);
+            if key_less(k_old, k_new) {
+                self.heap.push_or_update(u, k_new);
+                continue;
+            }
+            self.expansions += 1;
+            let lat = self.lat.take().expect("lattice");
+            if self.g[u] > self.rhs[u] {
+                self.touch(u);
+                self.g[u] = self.rhs[u];
+                for k in 0..8 {
+                    let s = lat.step(u, k);
+                    if !lat.valid[s] || s == self.goal {
+                        continue;
+                    }
+                    let via = M::via(&lat, &self.g, s, (k + 4) % 8);
+                    if improves(via, self.rhs[s]) {
+                        self.set_rhs(s, via);
+                        self.update_vertex_with(&lat, s);
+                    }
+                }
+            } else {
+                // Underconsistent: u's value rose. Re-evaluate the neighbours whose rhs could
+                // have come through u, then u itself.
+                let mut depends = [false; 8];
+                for (k, dep) in depends.iter_mut().enumerate() {
+                    let s = lat.step(u, k);
+                    if lat.valid[s] && s != self.goal {
+                        *dep = !improves(self.rhs[s], M::via(&lat, &self.g, s, (k + 4) % 8));
+                    }
+                }
+                self.touch(u);
+                self.g[u] = f64::INFINITY;
+                for (k, &dep) in depends.iter().enumerate() {
+                    if dep {
+                        let s = lat.step(u, k);
+                        let v = M::rhs(&lat, &self.g, s);
+                        self.set_rhs(s, v);
+                        self.update_vertex_with(&lat, s);
+                    }
+                }
+                if u != self.goal {
+                    let v = M::rhs(&lat, &self.g, u);
+                    self.set_rhs(u, v);
+                }
+                self.update_vertex_with(&lat, u);
+            }
+            self.lat = Some(lat);
+        }
+    }
+
+    #[inline]
+    fn update_vertex_with(&mut self, lat: &Lattice, n: usize) {
+        if !self.consistent(n) {
+            let m = self.g[n].min(self.rhs[n]);
+            let k = [m + M::h(lat, self.start, n) + self.km, m];
+            self.heap.push_or_update(n, k);
+        } else {
+            self.heap.remove(n);
+        }
+    }
+
+    /// Brings the search up to date for the current start and goal and extracts the path.
+    pub fn replan(&mut self) -> Result<Plan, PlanError> {
+        if !self.searching {
+            return Err(PlanError::NoPreviousPlan);
+        }
+        self.expansions = 0;
+        self.compute_shortest_path();
+        let lat = self.lat.as_ref().expect("lattice");
+        let grid = self.grid.as_ref().expect("grid");
+        let (sr, sc) = lat.coords(self.start);
+        let (gr, gc) = lat.coords(self.goal);
+        let no_path = PlanError::NoPath { start: Cell::new(sr, sc), goal: Cell::new(gr, gc) };
+        let value = self.g[self.start];
+        if !value.is_finite() {
+            return Err(no_path);
+        }
+        let (points, cost) = M::extract(lat, grid, &self.g, self.start, self.goal).ok_or(no_path)?;
+        Ok(Plan { cost, value, points, expansions: self.expansions })
+    }
+}

@@ -1,0 +1,49 @@
+//! Writing a run's output folder: `report.json` and `traverse.png`, each written to a temporary
+//! file and renamed, so a reader never sees a half-written output.
+
+use anyhow::Context;
+use rovernav_core::Point2;
+use rovernav_executive::RunOutput;
+use rovernav_viz::{TraverseScene, write_traverse_png};
+use std::path::Path;
+
+/// Writes `path` atomically from a closure that produces the bytes.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut Vec<u8>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut bytes = Vec::new();
+    write(&mut bytes)?;
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, &bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// Writes report.json and traverse.png into `dir` (created if needed).
+pub fn write_run_outputs(dir: &Path, output: &RunOutput) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
+    write_atomic(&dir.join("report.json"), |b| {
+        serde_json::to_writer_pretty(&mut *b, &output.report)?;
+        b.push(b'\n');
+        Ok(())
+    })?;
+    let world = &output.world;
+    let trace = &output.trace;
+    let keep_out: Vec<Vec<Point2>> = world.goal.keep_out.clone();
+    let scene = TraverseScene {
+        terrain: &world.terrain,
+        hazard_height: world.rover.clearance,
+        sensed: trace.sensed.as_ref(),
+        plans: &trace.plans,
+        overlays: &trace.overlays,
+        driven: &trace.truth,
+        estimated: &trace.estimate,
+        hazards: &trace.hazards,
+        start: world.start.position(),
+        goal: world.goal.position,
+        keep_out: &keep_out,
+    };
+    write_atomic(&dir.join("traverse.png"), |b| Ok(write_traverse_png(&scene, &mut *b)?))
+}

@@ -1,0 +1,416 @@
+//! The simulated platform: executes navigator commands on the true terrain and reports sensors.
+//!
+//! Implements the platform layer of the stop-sense-plan-drive cycle (paper 000 section 2, paper
+//! 004 section 2): a `Sense` command images wedges, `Drive` follows an arc and `Turn` turns in
+//! place, both integrated in substeps of one proprioceptive sample period (0.1 s, 1 cm at full
+//! speed) with wheel slip, hazard detection and the guards of a guarded move. Motions are
+//! commanded in wheel travel (the platform stops when its encoders say the distance is done), so
+//! slip shortens the true motion. All randomness comes from ChaCha8 streams derived from the
+//! seed, one stream per subsystem, so a run is reproducible and one sensor's draws do not shift
+//! another's.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rovernav_core::{
+    CameraKind, DriveGuard, NavCommand, OdometrySample, Pose2, Pose3, ProximityReading, RoverConfig,
+    SenseRequest, SensorFrame, wrap_angle,
+};
+use rovernav_terrain::Terrain;
+
+use crate::raycast::HeightField;
+use crate::sensors::{self, Proprioception, RangeGeometry, SensorModel, gaussian};
+use crate::vehicle::{self, VehicleGeometry};
+
+/// Time the motor-current monitor takes to declare a stalled wheel (s).
+const STALL_DETECT_TIME: f64 = 0.5;
+
+/// A failure injected into the simulated platform, for fault-protection tests.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// The sensor returns images without points.
+    SilentSensor(CameraKind),
+    /// The wheels of one side do not turn; the motor-current monitor stops the motion.
+    StalledWheel {
+        /// Left side when true, right side otherwise.
+        left: bool,
+    },
+    /// The compass reports NaN.
+    CompassNaN,
+}
+
+/// Active faults.
+#[derive(Clone, Debug, Default)]
+struct Faults {
+    silent: Vec<CameraKind>,
+    stalled_left: Option<bool>,
+    compass_nan: bool,
+}
+
+/// The world truth and the simulated sensors of one traverse.
+#[derive(Clone, Debug)]
+pub struct Simulator {
+    terrain: Terrain,
+    field: HeightField,
+    rover: RoverConfig,
+    model: SensorModel,
+    geometry: VehicleGeometry,
+    pose: Pose2,
+    truth: Pose3,
+    on_terrain: bool,
+    in_hazard: bool,
+    time: f64,
+    hazard_contacts: u32,
+    distance: f64,
+    sensing_actions: u64,
+    /// Cumulative wheel travel, left and right (m).
+    wheel_travel: [f64; 2],
+    proprio: Proprioception,
+    motion_rng: ChaCha8Rng,
+    range_rng: ChaCha8Rng,
+    proximity_rng: ChaCha8Rng,
+    faults: Faults,
+    /// The proximity reading that stopped the current motion, if a guard did.
+    guard_reading: Option<ProximityReading>,
+}
+
+/// A random stream of the run seed.
+fn stream(seed: u64, id: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(id);
+    rng
+}
+
+impl Simulator {
+    /// Places the rover at `start` on the terrain; the run's randomness derives from `seed`.
+    pub fn new(
+        terrain: Terrain,
+        rover: RoverConfig,
+        sensors: SensorModel,
+        start: Pose2,
+        seed: u64,
+    ) -> Simulator {
+        let field = HeightField::new(&terrain.dem);
+        let geometry = VehicleGeometry::new(&rover);
+        let start = Pose2::new(start.x, start.y, wrap_angle(start.yaw));
+        let contact = vehicle::settle(&terrain.dem, &geometry, start);
+        let in_hazard =
+            contact.as_ref().is_some_and(|c| vehicle::body_hazard(&terrain.dem, &geometry, c).is_some());
+        let truth = contact
+            .as_ref()
+            .map_or(Pose3 { x: start.x, y: start.y, yaw: start.yaw, ..Default::default() }, |c| c.pose);
+        let proprio = Proprioception::new(&sensors, stream(seed, 1));
+        Simulator {
+            field,
+            geometry,
+            pose: start,
+            truth,
+            on_terrain: contact.is_some(),
+            in_hazard,
+            time: 0.0,
+            hazard_contacts: 0,
+            distance: 0.0,
+            sensing_actions: 0,
+            wheel_travel: [0.0; 2],
+            proprio,
+            motion_rng: stream(seed, 2),
+            range_rng: stream(seed, 3),
+            proximity_rng: stream(seed, 4),
+            faults: Faults::default(),
+            guard_reading: None,
+            terrain,
+            rover,
+            model: sensors,
+        }
+    }
+
+    /// Executes one navigator command (Sense / Drive / Turn; Finish is a no-op) and returns what
+    /// the sensors report.
+    pub fn execute(&mut self, cmd: &NavCommand) -> SensorFrame {
+        let mut frame = SensorFrame::default();
+        match cmd {
+            NavCommand::Sense(requests) => {
+                for r in requests {
+                    self.sense(r, &mut frame);
+                }
+                self.rest_sample(&mut frame);
+            }
+            NavCommand::Drive { distance, curvature, guard } => {
+                let v = self.rover.max_speed / (1.0 + curvature.abs() * 0.5 * self.rover.track);
+                let duration = if v > 0.0 { distance.abs() / v } else { 0.0 };
+                self.move_wheels(*distance, curvature * distance, duration, *guard, &mut frame);
+                self.rest_sample(&mut frame);
+            }
+            NavCommand::Turn { angle } => {
+                let rate = self.rover.turn_rate;
+                let duration = if rate > 0.0 { angle.abs() / rate } else { 0.0 };
+                self.move_wheels(0.0, *angle, duration, DriveGuard::default(), &mut frame);
+                self.rest_sample(&mut frame);
+            }
+            NavCommand::Finish(..) => {}
+        }
+        frame.t = self.time;
+        // A proximity guard stop reports the reading that stopped the motion.
+        frame.proximity = match self.guard_reading.take() {
+            Some(reading) => reading,
+            None => self.read_proximity(),
+        };
+        frame
+    }
+
+    /// Proprioceptive samples at rest before the first command (lets a localiser estimate the
+    /// gyro bias by a zero-velocity update, paper 004 section 3.2).
+    pub fn initial_frame(&mut self) -> SensorFrame {
+        let mut frame = SensorFrame::default();
+        for _ in 0..self.model.initial_rest_samples {
+            self.rest_sample(&mut frame);
+        }
+        frame.t = self.time;
+        frame.proximity = self.read_proximity();
+        frame
+    }
+
+    /// Injects a fault; it stays until the end of the run.
+    pub fn inject_fault(&mut self, fault: Fault) {
+        match fault {
+            Fault::SilentSensor(kind) => {
+                if !self.faults.silent.contains(&kind) {
+                    self.faults.silent.push(kind);
+                }
+            }
+            Fault::StalledWheel { left } => self.faults.stalled_left = Some(left),
+            Fault::CompassNaN => self.faults.compass_nan = true,
+        }
+    }
+
+    /// The true 3D pose.
+    pub fn truth(&self) -> Pose3 {
+        self.truth
+    }
+
+    /// The simulation clock (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Times the true rover met a hazard (each stopped motion counts once).
+    pub fn hazard_contacts(&self) -> u32 {
+        self.hazard_contacts
+    }
+
+    /// True path length of the body origin (m, 3D along the surface).
+    pub fn distance_driven(&self) -> f64 {
+        self.distance
+    }
+
+    /// Range images taken.
+    pub fn sensing_actions(&self) -> u64 {
+        self.sensing_actions
+    }
+
+    /// The true terrain.
+    pub fn terrain(&self) -> &Terrain {
+        &self.terrain
+    }
+
+    /// The rover parameters.
+    pub fn rover(&self) -> &RoverConfig {
+        &self.rover
+    }
+
+    /// The sensor and slip parameters.
+    pub fn sensor_model(&self) -> &SensorModel {
+        &self.model
+    }
+
+    /// Cumulative true wheel travel of the left and right sides (m), before quantisation.
+    pub fn wheel_travel(&self) -> [f64; 2] {
+        self.wheel_travel
+    }
+
+    /// The gyro's current true bias (rad/s), for evaluating bias estimators.
+    pub fn gyro_bias(&self) -> f64 {
+        self.proprio.bias()
+    }
+
+    /// Encoder counts of the current wheel travel.
+    fn odometry(&self) -> OdometrySample {
+        let per_m = 100.0 * self.rover.encoder_counts_per_cm;
+        OdometrySample {
+            t: self.time,
+            left_counts: (self.wheel_travel[0] * per_m).floor() as i64,
+            right_counts: (self.wheel_travel[1] * per_m).floor() as i64,
+        }
+    }
+
+    /// Appends one sample of every proprioceptive sensor with the given true yaw rate.
+    fn push_sample(&mut self, frame: &mut SensorFrame, yaw_rate: f64) {
+        let imu = self.proprio.sample(&self.model, self.time, &self.truth, yaw_rate, self.faults.compass_nan);
+        frame.imu.push(imu);
+        frame.odometry.push(self.odometry());
+    }
+
+    /// One sample period at rest, then a sample.
+    fn rest_sample(&mut self, frame: &mut SensorFrame) {
+        let period = 1.0 / self.model.sample_rate.max(1e-3);
+        self.time += period;
+        self.proprio.elapse(&self.model, period);
+        self.push_sample(frame, 0.0);
+    }
+
+    /// Reads the proximity sensors for a guard; keeps the reading when it trips.
+    fn proximity_guard_trips(&mut self) -> bool {
+        let reading = self.read_proximity();
+        if reading.any() {
+            self.guard_reading = Some(reading);
+        }
+        reading.any()
+    }
+
+    fn read_proximity(&mut self) -> ProximityReading {
+        sensors::proximity(
+            &self.terrain.dem,
+            &self.field,
+            &self.truth,
+            &self.rover,
+            &self.model.proximity,
+            &mut self.proximity_rng,
+        )
+    }
+
+    /// Takes one range image.
+    fn sense(&mut self, request: &SenseRequest, frame: &mut SensorFrame) {
+        let (geometry, imager) = match *request {
+            SenseRequest::Mast { pan } => {
+                (RangeGeometry::mast(&self.rover, &self.model, pan), &self.model.mast)
+            }
+            SenseRequest::BodyFront => {
+                (RangeGeometry::body(&self.rover, &self.model, true), &self.model.body)
+            }
+            SenseRequest::BodyRear => {
+                (RangeGeometry::body(&self.rover, &self.model, false), &self.model.body)
+            }
+            SenseRequest::Lidar { pan } => (RangeGeometry::lidar(&self.model, pan), &self.model.lidar.imager),
+        };
+        let mut cloud = sensors::capture(
+            &self.terrain.dem,
+            &self.field,
+            &self.truth,
+            &geometry,
+            imager,
+            &mut self.range_rng,
+        );
+        if self.faults.silent.contains(&geometry.camera) {
+            cloud.points.clear();
+        }
+        let dt = imager.capture_time.max(0.0);
+        self.time += dt;
+        self.proprio.elapse(&self.model, dt);
+        self.sensing_actions += 1;
+        frame.clouds.push(cloud);
+    }
+
+    /// Moves the wheels: `centre` metres of signed centre-line wheel travel and `rotation`
+    /// radians of signed differential rotation, spread evenly over `duration` seconds.
+    fn move_wheels(
+        &mut self,
+        centre: f64,
+        rotation: f64,
+        duration: f64,
+        guard: DriveGuard,
+        frame: &mut SensorFrame,
+    ) {
+        if !duration.is_finite() || duration <= 0.0 {
+            return;
+        }
+        if !self.on_terrain {
+            frame.motion_stopped = Some("left the terrain model".into());
+            return;
+        }
+        let forward = centre > 0.0;
+        if guard.proximity && forward && self.proximity_guard_trips() {
+            frame.motion_stopped = Some("guard: proximity sensor triggered".into());
+            return;
+        }
+        let period = 1.0 / self.model.sample_rate.max(1e-3);
+        let slip = self.model.slip.clone();
+        let slip_offset = gaussian(&mut self.motion_rng, slip.per_command_sigma);
+        let scrubbed_half_track = 0.5 * self.rover.track * (1.0 + slip.turn_scrub);
+        let mut elapsed = 0.0;
+        let mut contact = match vehicle::settle(&self.terrain.dem, &self.geometry, self.pose) {
+            Some(c) => c,
+            None => {
+                frame.motion_stopped = Some("left the terrain model".into());
+                return;
+            }
+        };
+        while elapsed < duration {
+            let dt = period.min(duration - elapsed);
+            let fraction = dt / duration;
+            let (s_w, rot_w) = (centre * fraction, rotation * fraction);
+            let mut wheels = [s_w - rot_w * scrubbed_half_track, s_w + rot_w * scrubbed_half_track];
+            if let Some(left) = self.faults.stalled_left {
+                wheels[if left { 0 } else { 1 }] = 0.0;
+            }
+            // Body motion from the wheel travel, reduced by slip.
+            let grade = if s_w > 0.0 { -self.truth.pitch } else { self.truth.pitch };
+            let ratio = if s_w != 0.0 { slip.slip_ratio(grade) } else { slip.slip_ratio(0.0) };
+            let keep = 1.0 - (ratio + slip_offset).clamp(0.0, slip.max);
+            let s_true = 0.5 * (wheels[0] + wheels[1]) * keep;
+            let d_yaw = (wheels[1] - wheels[0]) / (2.0 * scrubbed_half_track) * keep;
+            let advance = s_true * self.truth.pitch.cos();
+            let creep = -slip.lateral_gain * self.truth.roll.sin() * s_true.abs();
+            let mid = self.pose.yaw + 0.5 * d_yaw;
+            let (sm, cm) = mid.sin_cos();
+            let next = Pose2::new(
+                self.pose.x + cm * advance - sm * creep,
+                self.pose.y + sm * advance + cm * creep,
+                wrap_angle(self.pose.yaw + d_yaw),
+            );
+            let Some(next_contact) = vehicle::settle(&self.terrain.dem, &self.geometry, next) else {
+                frame.motion_stopped = Some("left the terrain model".into());
+                break;
+            };
+            let dem = &self.terrain.dem;
+            // The wheels lead: a step at a wheel is reported before the body reaches it.
+            let hazard = vehicle::motion_step_hazard(dem, &self.geometry, &contact, &next_contact)
+                .or_else(|| vehicle::body_hazard(dem, &self.geometry, &next_contact));
+            if let Some(h) = hazard {
+                if !self.in_hazard {
+                    // The body meets the hazard: it stops there, touching it.
+                    self.hazard_contacts += 1;
+                    frame.motion_stopped = Some(h.to_string());
+                    break;
+                }
+            } else {
+                self.in_hazard = false;
+            }
+            let (a, b) = (self.truth, next_contact.pose);
+            self.distance += ((b.x - a.x).powi(2) + (b.y - a.y).powi(2) + (b.z - a.z).powi(2)).sqrt();
+            self.pose = next;
+            self.truth = next_contact.pose;
+            contact = next_contact;
+            self.wheel_travel[0] += wheels[0];
+            self.wheel_travel[1] += wheels[1];
+            self.time += dt;
+            elapsed += dt;
+            self.proprio.elapse(&self.model, dt);
+            self.push_sample(frame, d_yaw / dt);
+            if self.faults.stalled_left.is_some() && elapsed >= STALL_DETECT_TIME {
+                let side = if self.faults.stalled_left == Some(true) { "left" } else { "right" };
+                frame.motion_stopped = Some(format!("stall: {side} wheels not turning (motor current)"));
+                break;
+            }
+            if let Some(limit) = guard.max_tilt
+                && let Some(s) = frame.imu.last()
+                && (s.incl_roll.cos() * s.incl_pitch.cos()).clamp(-1.0, 1.0).acos() > limit
+            {
+                frame.motion_stopped = Some("guard: inclinometer tilt beyond the limit".into());
+                break;
+            }
+            if guard.proximity && forward && self.proximity_guard_trips() {
+                frame.motion_stopped = Some("guard: proximity sensor triggered".into());
+                break;
+            }
+        }
+    }
+}
