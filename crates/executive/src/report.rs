@@ -37,4 +37,19 @@ pub struct Report {
     pub mission: String,
     /// Straight-line distance from start to goal (m).
     pub straight_line_m: f64,
+    /// Where and why the true rover met a hazard.
+    pub hazard_events: Vec<HazardEvent>,
+}
+
+/// One hazard contact of the true rover.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct HazardEvent {
+    /// True east (m).
+    pub x: f64,
+    /// True north (m).
+    pub y: f64,
+    /// Navigator cycle.
+    pub cycle: u64,
+    /// The simulator's description.
+    pub cause: String,
 }

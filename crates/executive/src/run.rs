@@ -1,7 +1,7 @@
 //! The navigation loop: navigator <-> platform, with the localiser in between.
 
 use crate::mission::Mission;
-use crate::report::Report;
+use crate::report::{HazardEvent, Report};
 use crate::world::{World, WorldError, build_world};
 use rovernav_core::{
     Goal, Grid2, GridGeometry, NavCommand, NavInput, Navigator, Outcome, Overlay, Point2, Pose3, SensorFrame,
@@ -167,6 +167,7 @@ pub fn run_world(
     trace.estimate.push(localizer.estimate().pose);
     let mut cycles = 0u64;
     let mut last_hazards = 0;
+    let mut hazard_events = Vec::new();
     let (outcome, message) = loop {
         if sim.time() >= mission.time_limit_s {
             break (Outcome::Timeout, format!("mission time limit of {} s reached", mission.time_limit_s));
@@ -193,6 +194,12 @@ pub fn run_world(
         if sim.hazard_contacts() > last_hazards {
             last_hazards = sim.hazard_contacts();
             trace.hazards.push(Point2::new(truth.x, truth.y));
+            hazard_events.push(HazardEvent {
+                x: truth.x,
+                y: truth.y,
+                cycle: cycles,
+                cause: frame.motion_stopped.clone().unwrap_or_default(),
+            });
         }
         trace.truth.push(truth);
         trace.estimate.push(localizer.estimate().pose);
@@ -226,6 +233,7 @@ pub fn run_world(
         seed: mission.seed,
         mission: mission.name.clone(),
         straight_line_m: world.start.position().dist(goal.position),
+        hazard_events,
     };
     Ok(RunOutput { report, trace, world })
 }

@@ -2,7 +2,7 @@
 
 use crate::mission::{GoalSpec, Mission, PoseSpec, TerrainSpec};
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
-use rovernav_planning::{AStar, Cell, CostGrid, GlobalPlanner, GraphKind};
+use rovernav_planning::{Cell, CostGrid, FieldDStar, GlobalPlanner};
 use rovernav_sim::SensorModel;
 use rovernav_terrain::procedural::{ClearPad, RockyRegionParams, rocky_region};
 use rovernav_terrain::{LocalRect, MarsYardParams, RockFieldParams, Terrain};
@@ -93,7 +93,7 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
         message,
     };
 
-    let (terrain, to_local): (Terrain, Box<dyn Fn(f64, f64) -> (f64, f64)>) = match &mission.terrain {
+    let (terrain, to_local): (Terrain, Box<ToLocal>) = match &mission.terrain {
         TerrainSpec::Procedural {
             size_m,
             resolution_m,
@@ -190,6 +190,9 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
     })
 }
 
+/// Maps projected (easting, northing) to the terrain's local frame.
+type ToLocal = dyn Fn(f64, f64) -> (f64, f64);
+
 /// A rock-free pad around a mission's start or goal, larger than the rover.
 fn pad(p: Point2) -> ClearPad {
     ClearPad { x: p.x, y: p.y, radius: 1.0 }
@@ -246,7 +249,7 @@ pub fn optimal_length(world: &World) -> Option<f64> {
     // never declares a pad's own centre unsafe.
     let _ = grid.set_cost(start, 1.0);
     let _ = grid.set_cost(goal, 1.0);
-    let mut planner = AStar::new(GraphKind::CellCentres);
+    let mut planner = FieldDStar::new();
     planner.set_grid(grid);
     let plan = planner.plan(start, goal).ok()?;
     // The planner runs between cell centres (or corners); add the offsets to the true points.

@@ -202,6 +202,26 @@ impl Ekf {
         }
     }
 
+    /// Adds process noise to the position (m^2, both axes) and heading (rad^2) variances: for
+    /// error sources the odometry model leaves out (e.g. systematic slip).
+    pub fn add_pose_noise(&mut self, position_variance: f64, heading_variance: f64) {
+        self.cov[(0, 0)] += position_variance.max(0.0);
+        self.cov[(1, 1)] += position_variance.max(0.0);
+        self.cov[(2, 2)] += heading_variance.max(0.0);
+    }
+
+    /// Replaces the (x, y, yaw) block of the covariance, dropping its correlation with the gyro
+    /// bias: used after a map-relative fix, whose error is the map's own placement error.
+    pub fn set_pose_covariance(&mut self, covariance: &[[f64; 3]; 3]) {
+        for (i, row) in covariance.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                self.cov[(i, j)] = *v;
+            }
+            self.cov[(i, 3)] = 0.0;
+            self.cov[(3, i)] = 0.0;
+        }
+    }
+
     /// Fuses a map-matching fix (position and heading with covariance). Returns whether the fix
     /// was used: fixes with a high failure probability or a non-finite covariance are rejected.
     pub fn fuse_fix(&mut self, fix: &MatchResult) -> bool {

@@ -197,3 +197,175 @@ where
         poses_evaluated: result.poses_evaluated,
     })
 }
+
+/// How the branch-and-bound efficiency cases are drawn: rover-sized maps and a search window
+/// from a realistic dead-reckoning uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BnbSetup {
+    /// Map cell size (m).
+    pub resolution: f64,
+    /// Half-side of the square global map (m).
+    pub global_half: f64,
+    /// Range of the local view (m).
+    pub view_range: f64,
+    /// Half field of view of the local view (rad): three 45 degree mast wedges side by side.
+    pub view_half_angle: f64,
+    /// Dead-reckoning position error (m, one sigma); the window is 3 sigma wide.
+    pub prior_sigma_xy: f64,
+    /// Dead-reckoning heading error (rad, one sigma); the window is 3 sigma wide.
+    pub prior_sigma_yaw: f64,
+    /// Local cells scored per pose (even subsample), see [`MlParams::max_local_cells`].
+    pub max_local_cells: usize,
+    /// Rocks per 100 m^2 of the synthetic terrain.
+    pub rocks_per_100m2: f64,
+}
+
+impl Default for BnbSetup {
+    fn default() -> Self {
+        Self {
+            resolution: 0.05,
+            global_half: 10.0,
+            view_range: 5.0,
+            view_half_angle: 1.18,
+            prior_sigma_xy: 0.33,
+            prior_sigma_yaw: 0.033,
+            max_local_cells: 400,
+            rocks_per_100m2: 40.0,
+        }
+    }
+}
+
+/// Totals of branch and bound against exhaustive search over a batch of cases.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BnbReport {
+    /// Cases run.
+    pub cases: u64,
+    /// Cases where branch and bound found the exhaustive optimum's score.
+    pub exact: u64,
+    /// Poses of the lattices (what exhaustive search scores).
+    pub lattice_poses: u64,
+    /// Evaluations branch and bound made: every cell bound and every single pose scored
+    /// counts one (a cell bound costs the same as scoring one pose: one lookup per local cell).
+    pub evaluations: u64,
+    /// Of those, single poses scored.
+    pub poses_tested: u64,
+}
+
+impl BnbReport {
+    /// Lattice poses per branch-and-bound evaluation (the speed-up in scoring work).
+    pub fn evaluation_ratio(&self) -> f64 {
+        self.lattice_poses as f64 / self.evaluations.max(1) as f64
+    }
+
+    /// Whether every case found the exhaustive optimum.
+    pub fn all_exact(&self) -> bool {
+        self.exact == self.cases
+    }
+
+    fn add(&mut self, o: &BnbReport) {
+        self.cases += o.cases;
+        self.exact += o.exact;
+        self.lattice_poses += o.lattice_poses;
+        self.evaluations += o.evaluations;
+        self.poses_tested += o.poses_tested;
+    }
+}
+
+/// One branch-and-bound case: a synthetic rocky terrain (one per five cases), a global map of
+/// it, a forward local view from a random true pose, and a window around a prior drawn from
+/// the dead-reckoning errors (clamped inside the window).
+pub fn bnb_case(setup: &BnbSetup, case: u64) -> (MlMatcher, rovernav_core::Grid2<f32>, SearchWindow) {
+    use rand::Rng;
+    let mut rng = ChaCha8Rng::seed_from_u64(case);
+    let r = setup.resolution;
+    let field = crate::synthetic::fractal_terrain(
+        &crate::synthetic::TerrainParams {
+            size: 2.0 * setup.global_half + 2.0 * setup.view_range + 4.0,
+            resolution: r / 2.0,
+            rocks_per_100m2: setup.rocks_per_100m2,
+            ..Default::default()
+        },
+        case / 5,
+    );
+    let n = (2.0 * setup.global_half / r).round() as usize;
+    let half = setup.global_half;
+    let global =
+        field.sample(GridGeometry { cols: n, rows: n, resolution: r, origin_x: -half, origin_y: -half });
+    let span = half - setup.view_range - 1.0;
+    let truth = Pose2::new(
+        rng.random_range(-span..span),
+        rng.random_range(-span..span),
+        rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+    );
+    let range = setup.view_range;
+    let geometry = GridGeometry {
+        cols: (range / r).ceil() as usize,
+        rows: (2.0 * range / r).ceil() as usize,
+        resolution: r,
+        origin_x: 0.0,
+        origin_y: -range,
+    };
+    let wedge = rovernav_core::Wedge {
+        bearing: 0.0,
+        half_angle: setup.view_half_angle,
+        min_range: 0.8,
+        max_range: range,
+    };
+    let local =
+        crate::synthetic::local_map_from_field(&field, &truth, geometry, Some(&wedge), 0.01, 0.1, case);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+    let (wx, wy) = (3.0 * setup.prior_sigma_xy, 3.0 * setup.prior_sigma_yaw);
+    let error = |s: f64, w: f64, rng: &mut ChaCha8Rng| (s * unit.sample(rng)).clamp(-0.9 * w, 0.9 * w);
+    let window = SearchWindow {
+        center: Pose2::new(
+            truth.x + error(setup.prior_sigma_xy, wx, &mut rng),
+            truth.y + error(setup.prior_sigma_xy, wx, &mut rng),
+            truth.yaw + error(setup.prior_sigma_yaw, wy, &mut rng),
+        ),
+        half_x: wx,
+        half_y: wx,
+        half_yaw: wy,
+    };
+    let params = MlParams { max_local_cells: Some(setup.max_local_cells), ..Default::default() };
+    let matcher = MlMatcher::new(&global, params).expect("synthetic global map is valid");
+    (matcher, local, window)
+}
+
+/// Runs cases `first..first + count` of [`bnb_case`] with branch and bound and with exhaustive
+/// search (the independent reference), on up to `threads` threads.
+pub fn bnb_efficiency(
+    setup: &BnbSetup,
+    first: u64,
+    count: u64,
+    threads: usize,
+) -> Result<BnbReport, MatchError> {
+    let threads = threads.clamp(1, count.max(1) as usize) as u64;
+    let results: Vec<Result<BnbReport, MatchError>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                scope.spawn(move || {
+                    let mut report = BnbReport::default();
+                    for case in (first..first + count).filter(|c| c % threads == t) {
+                        let (matcher, local, window) = bnb_case(setup, case);
+                        let (bb, lattice) = matcher.search(&local, &window, false)?;
+                        let (ex, _) = matcher.search(&local, &window, true)?;
+                        report.add(&BnbReport {
+                            cases: 1,
+                            exact: u64::from(bb.score == ex.score),
+                            lattice_poses: lattice.size(),
+                            evaluations: bb.evaluations,
+                            poses_tested: bb.poses_tested,
+                        });
+                    }
+                    Ok(report)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+    });
+    let mut total = BnbReport::default();
+    for r in results {
+        total.add(&r?);
+    }
+    Ok(total)
+}

@@ -3,6 +3,7 @@
 //! - [`dead_reckoning`]: compass + encoder dead reckoning (paper 001).
 //! - [`ekf`]: gyro/inclinometer/odometry pose estimator with zero-velocity update, slip
 //!   correction and map-matching fixes (paper 004 section 3.2).
+//! - [`ekf_ml`]: the EKF with terrain-matching fixes against the rover's own map ("ekf-ml").
 //! - [`matching`]: terrain map matching: maximum likelihood with branch and bound (paper 000
 //!   section 4) and partial Hausdorff (paper 002 section 3).
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
@@ -16,6 +17,7 @@
 
 pub mod dead_reckoning;
 pub mod ekf;
+pub mod ekf_ml;
 pub mod evaluation;
 pub mod matching;
 pub mod synthetic;
@@ -23,6 +25,7 @@ pub mod target;
 
 pub use dead_reckoning::{DeadReckoning, DeadReckoningParams};
 pub use ekf::{Ekf, EkfParams, EkfStats};
+pub use ekf_ml::{EkfMl, EkfMlParams, EkfMlStats};
 pub use matching::{
     HausdorffMatcher, HausdorffParams, MatchError, MatchResult, MlMatcher, MlParams, SearchWindow,
 };
@@ -31,13 +34,14 @@ pub use target::{TargetParams, select_target};
 use rovernav_core::{Localizer, Pose3, RoverConfig};
 
 /// Names accepted by [`localizer_by_name`].
-pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf"];
+pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf", "ekf-ml"];
 
 /// Builds a localiser by registry name, or `None` for an unknown name.
 pub fn localizer_by_name(name: &str, config: &RoverConfig, initial: Pose3) -> Option<Box<dyn Localizer>> {
     match name {
         "dead-reckoning" => Some(Box::new(DeadReckoning::new(config, initial))),
         "ekf" => Some(Box::new(Ekf::new(config, initial))),
+        "ekf-ml" => Some(Box::new(EkfMl::new(config, initial))),
         _ => None,
     }
 }

@@ -123,7 +123,7 @@ impl GridNavigator {
     fn replan(&mut self, from: Point2, goal: Point2) {
         self.waypoints.clear();
         let terrain = self.terrain.as_ref().expect("map initialised before planning");
-        let grid = terrain.cost_grid(self.cost_mode(), from);
+        let grid = terrain.cost_grid(self.cost_mode(), from, goal);
         let g = grid.geometry();
         let to_cell = |p: Point2| -> Option<Cell> { g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c)) };
         let (Some(start), Some(goal_cell)) = (to_cell(from), to_cell(goal)) else {
@@ -168,8 +168,10 @@ impl GridNavigator {
             let n = (len / step).ceil().max(1.0) as usize;
             for i in 1..=n {
                 let p = a.add(b.sub(a).scale(i as f64 / n as f64));
-                let near_rover = p.dist(from) < 0.5;
-                if !near_rover && !terrain.is_known_safe(p) {
+                // The cells under the rover itself may be unsensed (the cameras look ahead).
+                let near_rover = p.dist(from) < 0.3;
+                let passable = grid.cost_at_point(grid.world_to_grid(p)).is_finite();
+                if !(near_rover || terrain.is_assessed(p) && passable) {
                     stop_point = Some(p);
                     break 'walk;
                 }
@@ -252,6 +254,13 @@ impl Navigator for GridNavigator {
         }
         if let Some(why) = &input.frame.motion_stopped {
             self.waypoints.clear();
+            if why.starts_with("hazard") && self.backing_out {
+                // Even backing away meets the terrain: the body is caught. Stop before more
+                // attempts do damage, as flight fault protection does.
+                let why = format!("stuck in contact with the terrain ({why}); operators must help");
+                self.finish = Some((Outcome::HelpRequested, why.clone()));
+                return NavCommand::Finish(Outcome::HelpRequested, why);
+            }
             if why.starts_with("hazard") && !self.backing_out {
                 // Remember where the body met the terrain: ahead of the rover for a forward
                 // drive, behind it when reversing, under the leading corners when turning.
@@ -319,8 +328,9 @@ impl Navigator for GridNavigator {
         }
         let bearing = self.look_bearing.unwrap_or_else(|| goal.sub(here).angle());
         // When repeated looks in one direction reveal nothing drivable, widen the search.
-        let bearing =
-            bearing + [0.0, 1.2, -1.2, 2.4, -2.4, 3.14][(self.blocked_senses.saturating_sub(1) as usize) % 6];
+        let bearing = bearing
+            + [0.0, 1.2, -1.2, 2.4, -2.4, std::f64::consts::PI]
+                [(self.blocked_senses.saturating_sub(1) as usize) % 6];
         self.last_command = LastCommand::Other;
         self.sense(est.yaw, bearing)
     }

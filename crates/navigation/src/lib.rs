@@ -5,7 +5,11 @@
 //! only the `NavInput` the executive gives it (pose estimate and sensor frames), never ground
 //! truth. A new navigator is one module plus one line in [`navigator_by_name`].
 
+pub mod gestalt;
 pub mod grid_nav;
+pub mod nat;
+pub mod roverbug;
+pub mod sr2;
 pub mod terrain_model;
 
 pub use grid_nav::{GridNavigator, GridNavigatorConfig};
@@ -14,7 +18,8 @@ pub use terrain_model::TerrainModel;
 use rovernav_core::{Navigator, RoverConfig};
 
 /// Registered navigator names.
-pub const NAVIGATOR_NAMES: [&str; 2] = ["astar-grid", "mrpta"];
+pub const NAVIGATOR_NAMES: [&str; 7] =
+    ["astar-grid", "mrpta", "gestalt", "gestalt+field-dstar", "sr2", "nat", "roverbug"];
 
 /// A fresh navigator by registry name, or `None` if the name is unknown.
 pub fn navigator_by_name(name: &str, rover: &RoverConfig) -> Option<Box<dyn Navigator>> {
@@ -29,6 +34,19 @@ pub fn navigator_by_name(name: &str, rover: &RoverConfig) -> Option<Box<dyn Navi
             rover.clone(),
             GridNavigatorConfig { planner: "dstar-lite", ..Default::default() },
         ))),
+        "gestalt" => Some(Box::new(gestalt::GestaltNavigator::new(
+            "gestalt",
+            rover.clone(),
+            gestalt::GestaltConfig::default(),
+        ))),
+        "gestalt+field-dstar" => Some(Box::new(gestalt::GestaltNavigator::new(
+            "gestalt+field-dstar",
+            rover.clone(),
+            gestalt::GestaltConfig { field_dstar: true, ..Default::default() },
+        ))),
+        "sr2" => Some(Box::new(sr2::Sr2Navigator::new(rover.clone(), sr2::Sr2Config::default()))),
+        "nat" => Some(Box::new(nat::NatNavigator::new(rover.clone(), nat::NatConfig::default()))),
+        "roverbug" => Some(Box::new(roverbug::RoverBug::new(rover.clone(), Default::default()))),
         _ => None,
     }
 }

@@ -10,6 +10,10 @@ use rovernav_planning::{Cell, CostGrid};
 /// Fraction of the rover's clearance and tilt limits at which terrain counts as a hazard.
 pub const HAZARD_MARGIN: f64 = 0.8;
 
+/// Cell size of the robot-centred grid (m): finer than MRPTA's 0.15 m so that rocks of a few
+/// decimetres, which a Rocky 7-sized rover cannot straddle, span several cells.
+pub const T_GRID_RESOLUTION: f64 = 0.1;
+
 /// Cost per metre of leaving a grown hazard the rover finds itself in.
 const ESCAPE_COST: f32 = 50.0;
 
@@ -45,6 +49,8 @@ impl TerrainModel {
             safety_buffer,
             clearance: rover.clearance * HAZARD_MARGIN,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
+            resolution: T_GRID_RESOLUTION,
+            hazards_from_cell_max: false,
             ..TerrainConfig::for_rover(rover)
         };
         let (cx, cy) =
@@ -128,7 +134,7 @@ impl TerrainModel {
     /// planner never drives into it again.
     pub fn mark_contact(&mut self, p: Point2) {
         let g = self.hazard.geometry;
-        let reach = 0.1;
+        let reach = 0.25;
         let steps = (reach / g.resolution).ceil() as isize;
         for dr in -steps..=steps {
             for dc in -steps..=steps {
@@ -144,12 +150,9 @@ impl TerrainModel {
         self.grow_hazards();
     }
 
-    /// Whether a point is in assessed terrain and outside every grown hazard.
-    pub fn is_known_safe(&self, p: Point2) -> bool {
-        match self.hazard.geometry.cell_of(p.x, p.y) {
-            Some((c, r)) => *self.assessed.get(c, r) && !*self.grown.get(c, r),
-            None => false,
-        }
+    /// Whether the hazard state of the cell containing a point has been assessed from range data.
+    pub fn is_assessed(&self, p: Point2) -> bool {
+        self.hazard.geometry.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.assessed.get(c, r))
     }
 
     /// Whether a point lies in a grown hazard.
@@ -159,7 +162,7 @@ impl TerrainModel {
 
     /// The planning grid. Cells within the rover's own footprint are never blocked, so a rover
     /// that finds itself inside a grown hazard (noise, or a late detection) can still plan out.
-    pub fn cost_grid(&self, mode: CostMode, rover: Point2) -> CostGrid {
+    pub fn cost_grid(&self, mode: CostMode, rover: Point2, goal: Point2) -> CostGrid {
         let g = self.hazard.geometry;
         let mut grid = match mode {
             CostMode::Optimistic => CostGrid::uniform(g.rows, g.cols, 1.0).expect("non-empty grid"),
@@ -167,14 +170,20 @@ impl TerrainModel {
         };
         grid.set_geometry(g);
         // A rover that finds itself inside grown hazards (noise, or a late detection) may leave
-        // through them at a high cost, but never through an obstacle cell itself.
+        // through them at a high cost, but never through an obstacle cell itself; likewise a
+        // goal that a nearby rock's grown margin covers stays reachable.
         let escape_radius = self.growth + g.resolution;
+        let in_grown = |p: Point2| g.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.grown.get(c, r));
+        let (rover_trapped, goal_covered) = (in_grown(rover), in_grown(goal));
         for r in 0..g.rows {
             for c in 0..g.cols {
                 let cell = Cell::new(r, c);
                 if *self.grown.get(c, r) {
                     let (x, y) = g.center(c, r);
-                    let escapable = !*self.hazard.get(c, r) && Point2::new(x, y).dist(rover) <= escape_radius;
+                    let p = Point2::new(x, y);
+                    let escapable = !*self.hazard.get(c, r)
+                        && ((rover_trapped && p.dist(rover) <= escape_radius)
+                            || (goal_covered && p.dist(goal) <= escape_radius));
                     let _ = grid.set_cost(cell, if escapable { ESCAPE_COST } else { f32::INFINITY });
                 }
                 if mode == CostMode::Optimistic {

@@ -70,6 +70,10 @@ pub struct TerrainConfig {
     pub max_arc_step: f64,
     /// Point-density check in front of the rover.
     pub density: DensityConfig,
+    /// Run the step/slope hazard model on each cell's highest point instead of its mean: a
+    /// rock narrower than two cells loses much of its height in a cell mean, so navigators
+    /// that must never touch a rock use the maximum (range noise then errs on the safe side).
+    pub hazards_from_cell_max: bool,
 }
 
 impl Default for TerrainConfig {
@@ -90,6 +94,7 @@ impl TerrainConfig {
             footprint_radius: rover.radius(),
             min_window_fraction: 0.25,
             min_points_per_cell: 1,
+            hazards_from_cell_max: false,
             cell_roughness_limit: rover.clearance / 3.0,
             footprint_roughness_limit: rover.clearance / 2.0,
             // Typical stereo/LIDAR height noise at a few metres.

@@ -94,7 +94,12 @@ pub fn assess_cells<'a>(
     let counts: Vec<u32> = stats.iter().map(|c| c.count).collect();
 
     let (cols, rows, res) = (geometry.cols, geometry.rows, geometry.resolution);
-    let footprint = analyse_footprints(&heights, cols, rows, res, &config.footprint_params());
+    let hazard_heights: Vec<f32> = if config.hazards_from_cell_max {
+        stats.iter().map(|c| if c.count > 0 { c.max_z } else { f32::NAN }).collect()
+    } else {
+        heights.clone()
+    };
+    let footprint = analyse_footprints(&hazard_heights, cols, rows, res, &config.footprint_params());
     let traversability =
         traversability_layer(&stats, &heights, cols, rows, res, centre, &config.traversability_params());
     let goodness = goodness_layer(&heights, &footprint, &config.goodness_params());

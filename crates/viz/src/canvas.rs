@@ -130,12 +130,9 @@ impl Canvas {
                 let cover = (half + 0.5 - d).clamp(0.0, 1.0);
                 if cover > 0.0 {
                     let i = (py as usize * self.width + px as usize) * 3;
-                    // Max-blend so overlapping segment ends don't darken joints.
-                    let target = [c.0, c.1, c.2];
-                    for k in 0..3 {
+                    for (k, target) in [c.0, c.1, c.2].into_iter().enumerate() {
                         let old = self.pixels[i + k] as f64;
-                        let new = old + (target[k] as f64 - old) * cover;
-                        self.pixels[i + k] = new.round() as u8;
+                        self.pixels[i + k] = (old + (target as f64 - old) * cover).round() as u8;
                     }
                 }
             }

@@ -265,9 +265,15 @@ pub struct LocalCells {
 }
 
 impl LocalCells {
-    /// Lists the known cells of a (high-passed) rover-frame local map against a voxel map.
-    pub fn new(local: &Grid2<f32>, voxels: &VoxelMap) -> Result<Self, MatchError> {
-        let cells = occupied_cells(local);
+    /// Lists the known cells of a (high-passed) rover-frame local map against a voxel map,
+    /// keeping an even subsample of at most `max_cells` of them when given.
+    pub fn new(local: &Grid2<f32>, voxels: &VoxelMap, max_cells: Option<usize>) -> Result<Self, MatchError> {
+        let mut cells = occupied_cells(local);
+        if let Some(max) = max_cells.filter(|&m| m > 0 && cells.len() > m) {
+            // Every k-th cell in row order, with a fractional stride so exactly `max` remain.
+            let stride = cells.len() as f64 / max as f64;
+            cells = (0..max).map(|i| cells[(i as f64 * stride) as usize]).collect();
+        }
         if cells.is_empty() {
             return Err(MatchError::EmptyMap { map: "local" });
         }

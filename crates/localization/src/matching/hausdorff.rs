@@ -122,7 +122,7 @@ impl HausdorffMatcher {
         exhaustive: bool,
     ) -> Result<MatchDetails, MatchError> {
         window.validate()?;
-        let cells = LocalCells::new(&high_pass(local, self.params.high_pass_window), &self.voxels)?;
+        let cells = LocalCells::new(&high_pass(local, self.params.high_pass_window), &self.voxels, None)?;
         let mut scorer = Scorer::new(
             &self.voxels,
             &cells,

@@ -48,6 +48,9 @@ pub struct MlParams {
     pub bound: BoundKind,
     /// How cells of poses are split.
     pub split: SplitRule,
+    /// Score at most this many local cells (an even subsample of the occupied cells, taken
+    /// after the high-pass filter); `None` scores them all. Matching time is proportional to it.
+    pub max_local_cells: Option<usize>,
 }
 
 impl Default for MlParams {
@@ -64,6 +67,7 @@ impl Default for MlParams {
             unknown_sigmas: 1.0,
             bound: BoundKind::MinPool,
             split: SplitRule::HeadingFirst,
+            max_local_cells: None,
         }
     }
 }
@@ -194,7 +198,7 @@ impl MlMatcher {
             Some(w) => high_pass(local, w),
             None => local.clone(),
         };
-        let cells = LocalCells::new(&filtered, &self.voxels)?;
+        let cells = LocalCells::new(&filtered, &self.voxels, self.params.max_local_cells)?;
         let mut scorer = Scorer::new(
             &self.voxels,
             &cells,
@@ -227,7 +231,7 @@ impl MlMatcher {
             Some(w) => high_pass(local, w),
             None => local.clone(),
         };
-        let cells = LocalCells::new(&filtered, &self.voxels)?;
+        let cells = LocalCells::new(&filtered, &self.voxels, self.params.max_local_cells)?;
         let mut scorer = Scorer::new(
             &self.voxels,
             &cells,

@@ -1,0 +1,138 @@
+//! RoverBug (paper 000 section 2) through the real simulator on hand-built terrains: open
+//! ground, a single rock, a wall wider than the wedge, a U-shaped trap, a goal inside a ring
+//! of rocks and a goal inside a rock's C-obstacle.
+
+use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
+use rovernav_executive::{RunOutput, RunSettings, World, run_world};
+use rovernav_sim::SensorModel;
+use rovernav_terrain::procedural::add_rocks;
+use rovernav_terrain::{Dem, Rock, Terrain};
+
+/// A rock dome tall enough to be a hazard for the default rover (clearance 0.18 m).
+fn rock(x: f64, y: f64, diameter: f64) -> Rock {
+    Rock { x, y, diameter, height: 0.35 }
+}
+
+/// Runs RoverBug on a flat 0.05 m DEM of `size` metres with `rocks`.
+fn run(size: (f64, f64), rocks: Vec<Rock>, start: Pose2, goal: Point2, tolerance: f64) -> RunOutput {
+    let res = 0.05;
+    let mut dem = Dem::flat((size.0 / res) as usize, (size.1 / res) as usize, res, 0.0);
+    add_rocks(&mut dem, &rocks);
+    let world = World {
+        terrain: Terrain { dem, rocks },
+        rover: RoverConfig::default(),
+        sensor_model: SensorModel::default(),
+        start,
+        goal: Goal { position: goal, tolerance, waypoints: vec![], keep_out: vec![] },
+    };
+    let settings = RunSettings {
+        navigator: "roverbug".into(),
+        localizer: "dead-reckoning".into(),
+        seed: 1,
+        time_limit_s: 3600.0,
+        max_cycles: 3000,
+        name: "roverbug-scenario".into(),
+    };
+    run_world(world, &settings, "roverbug scenario", &mut |_| {}).expect("run")
+}
+
+/// Largest distance of a truth-trace point from the segment a-b.
+fn max_deviation(out: &RunOutput, a: Point2, b: Point2) -> f64 {
+    let d = b.sub(a);
+    out.trace
+        .truth
+        .iter()
+        .map(|p| {
+            let p = Point2::new(p.x, p.y);
+            let t = (p.sub(a).dot(d) / d.dot(d)).clamp(0.0, 1.0);
+            p.dist(a.add(d.scale(t)))
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Smallest distance from the truth trace to a point.
+fn closest_approach(out: &RunOutput, c: Point2) -> f64 {
+    out.trace.truth.iter().map(|p| Point2::new(p.x, p.y).dist(c)).fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn open_terrain_goes_straight_to_the_goal() {
+    let (a, b) = (Point2::new(2.0, 5.0), Point2::new(14.0, 5.0));
+    let out = run((16.0, 10.0), vec![], Pose2::new(a.x, a.y, 0.0), b, 0.3);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    assert!(max_deviation(&out, a, b) < 0.3, "deviation {}", max_deviation(&out, a, b));
+    assert!(out.report.distance_driven_m < 1.05 * a.dist(b));
+}
+
+#[test]
+fn single_rock_is_passed_tangent_to_its_c_obstacle() {
+    let (a, b) = (Point2::new(2.0, 6.0), Point2::new(14.0, 6.0));
+    let centre = Point2::new(7.0, 6.0);
+    let out = run((16.0, 12.0), vec![rock(centre.x, centre.y, 0.8)], Pose2::new(a.x, a.y, 0.0), b, 0.3);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    // Rock radius 0.4 + rover radius 0.5 + buffer 0.1: the rover centre passes about 1 m from
+    // the rock centre (the grown hull and cell corners add up to ~0.2 m).
+    let gap = closest_approach(&out, centre);
+    assert!((0.85..1.5).contains(&gap), "closest approach {gap}");
+    // A tangent detour is short: at most ~10 % longer than the straight line.
+    assert!(out.report.distance_driven_m < 1.1 * a.dist(b), "{}", out.report.distance_driven_m);
+}
+
+#[test]
+fn wall_wider_than_the_wedge_is_circumvented() {
+    // A wall of separate rocks 7.2 m long across the line to the goal (the 5 m wedge sees ~4 m
+    // of it); the gaps are far narrower than the rover, so the C-obstacles overlap.
+    let rocks: Vec<Rock> = (0..10).map(|i| rock(8.0, 3.9 + 0.8 * i as f64, 0.6)).collect();
+    let (a, b) = (Point2::new(2.0, 7.5), Point2::new(14.0, 7.5));
+    let out = run((16.0, 16.0), rocks, Pose2::new(a.x, a.y, 0.0), b, 0.3);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+}
+
+#[test]
+fn u_shaped_trap_is_escaped_by_boundary_following() {
+    // A U of separate rocks open toward the start: back wall at x = 9.5 from y = 4 to 11.7,
+    // arms from x = 5.1 at y = 4 and y = 11.7. The 0.5 m gaps are far narrower than the rover
+    // (its C-obstacles overlap) yet keep the rocks distinct obstacles, so the trap is concave.
+    let mut rocks: Vec<Rock> = (0..8).map(|i| rock(9.5, 4.0 + 1.1 * i as f64, 0.6)).collect();
+    for i in 0..4 {
+        rocks.push(rock(5.1 + 1.1 * i as f64, 4.0, 0.6));
+        rocks.push(rock(5.1 + 1.1 * i as f64, 11.7, 0.6));
+    }
+    let (a, b) = (Point2::new(2.0, 7.85), Point2::new(15.0, 7.85));
+    let out = run((18.0, 16.0), rocks, Pose2::new(a.x, a.y, 0.0), b, 0.3);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+}
+
+#[test]
+fn goal_inside_a_ring_of_rocks_is_unreachable() {
+    let c = Point2::new(10.0, 8.0);
+    // 16 separate rocks on a 3 m circle (1.17 m apart, 0.57 m gaps): the grown C-obstacles
+    // close the ring though each rock stays a distinct obstacle.
+    let rocks: Vec<Rock> = (0..16)
+        .map(|i| {
+            let t = i as f64 * std::f64::consts::TAU / 16.0;
+            rock(c.x + 3.0 * t.cos(), c.y + 3.0 * t.sin(), 0.6)
+        })
+        .collect();
+    let out = run((20.0, 16.0), rocks, Pose2::new(1.5, 8.0, 0.0), c, 0.3);
+    assert_eq!(out.report.outcome, "unreachable", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    // Never inside the ring.
+    assert!(closest_approach(&out, c) > 2.7, "{}", closest_approach(&out, c));
+}
+
+#[test]
+fn goal_inside_a_rock_ends_at_a_vertex_of_its_c_obstacle() {
+    // Goal at a rock's centre: the C-obstacle's vertices are the goals (paper 000 section 2),
+    // so the run is "reached" at a vertex, about the growth distance from the rock's edge.
+    let centre = Point2::new(10.0, 6.0);
+    let out = run((14.0, 12.0), vec![rock(centre.x, centre.y, 0.8)], Pose2::new(2.0, 6.0, 0.0), centre, 0.3);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    // Rock radius 0.4 + growth 0.6, plus the hull's cell corners and the polygon's overshoot.
+    assert!((0.9..1.4).contains(&out.report.goal_error_m), "goal error {}", out.report.goal_error_m);
+}

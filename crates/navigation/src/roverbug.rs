@@ -1,0 +1,953 @@
+//! RoverBug: sensor-based path planning on the local tangent graph (paper 000 section 2,
+//! Laubach, Olson, Burdick and Hayati, after the WedgeBug algorithm).
+//!
+//! The rover keeps no global map: at every sensing position the C-obstacles are rebuilt from the
+//! wedges sensed there (step/slope hazards, convex hulls grown by the rover radius plus a safety
+//! buffer), and the local tangent graph (LTG) is built inside the visible region. Two modes:
+//!
+//! * **Motion-to-goal** (section 2.1): sense the mast wedge toward the goal, search the subgraph
+//!   G1 of LTG nodes no farther from the goal than `min(d(x, T), d_LEAVE)` with A* for the
+//!   locally shortest path to the goal, cut it at the wedge's far radius minus a buffer and drive
+//!   it; a blocking obstacle switches to boundary following.
+//! * **Boundary following** (section 2.2): "virtual" boundary following swings the mast at
+//!   `2 k alpha_mast` alternately on both sides of the goal direction until the conglomerate
+//!   wedge shows the obstacle's silhouette vertex in its interior (or halts as trapped once the
+//!   scans overlap all around); "normal" boundary following then looks toward the goal
+//!   (leaving when a reachable node beats `d_reach`, resetting `d_LEAVE`) and otherwise moves to
+//!   the farthest visible boundary vertex in the positive sense, halting as unreachable when the
+//!   loop point `V_loop` comes back.
+//!
+//! Departures from the paper, for the simulated platform:
+//! * normal boundary following looks with the mast as well as the forward body pair (the body
+//!   pair alone sees 1.5 m), and turns the gaze in steps of `2 alpha_mast`;
+//! * the loop is detected when the rover returns within a metre of `V_loop` after leaving it
+//!   by more than two metres;
+//! * besides the recorded parameters (`d_LEAVE`, `d_reach`, `V_loop`), the C-obstacles of the
+//!   last view within reach of the rover are carried to the next one (the mast is blind within
+//!   a metre), and hazard contacts are recorded as small C-obstacles;
+//! * when normal boundary following has turned the gaze all around without a boundary vertex
+//!   in the interior of the conglomerate wedge (the paper aborts), it steps to the most extreme
+//!   directly reachable node not yet visited, and asks for help only when there is none.
+//!
+//! Goal keep-out polygons are not used.
+
+use crate::terrain_model::HAZARD_MARGIN;
+use rovernav_core::{
+    DriveGuard, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind, Point2,
+    Pose2, RoverConfig, SenseRequest, angle_diff,
+};
+use rovernav_perception::{CObstacle, SensedWedge, TerrainConfig, TerrainEvaluator};
+use std::collections::VecDeque;
+use std::f64::consts::PI;
+
+/// Tunable parameters of RoverBug.
+#[derive(Clone, Debug)]
+pub struct RoverBugConfig {
+    /// Buffer left inside the wedge's far radius when a path is truncated (m).
+    pub range_buffer: f64,
+    /// Heading error above which the rover turns in place before driving (rad).
+    pub turn_threshold: f64,
+    /// How much closer than `d_reach` a node must be to leave boundary following (m).
+    pub leave_margin: f64,
+    /// Angular margin inside the conglomerate wedge's bounding rays for "interior" (rad).
+    pub interior_angle: f64,
+    /// Distance from the sensing position within which the ground counts as visible (m): the
+    /// rover's own footprint, seen from the previous position.
+    pub near_visible: f64,
+    /// Steps (sense-plan-act cycles) before asking for help.
+    pub max_steps: u32,
+}
+
+impl Default for RoverBugConfig {
+    fn default() -> Self {
+        Self {
+            range_buffer: 1.0,
+            turn_threshold: 10f64.to_radians(),
+            leave_margin: 0.1,
+            interior_angle: 4f64.to_radians(),
+            near_visible: 1.0,
+            max_steps: 200,
+        }
+    }
+}
+
+/// Operational mode (paper 000 sections 2.1-2.2).
+#[derive(Clone, Debug, PartialEq)]
+enum Mode {
+    /// Monotonic progress toward the goal.
+    MotionToGoal,
+    /// Mast scans at `2 k alpha_mast` from the goal direction; `scans` are the k already sensed.
+    Virtual { sense: f64, scans: Vec<i32> },
+    /// Circumnavigating the obstacle in the positive `sense` (+1 counter-clockwise).
+    Normal { sense: f64, d_reach: f64, v_loop: Point2, left_loop: bool, scans: Vec<i32> },
+}
+
+/// Everything sensed at the current position (renewed at every step: no global map).
+struct View {
+    evaluator: TerrainEvaluator,
+    wedges: Vec<SensedWedge>,
+    origin: Point2,
+}
+
+/// A node of the local tangent graph.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    p: Point2,
+    /// (obstacle, vertex) for C-obstacle vertices.
+    vertex: Option<(usize, usize)>,
+    /// A vertex of the C-obstacle containing the goal.
+    goal_vertex: bool,
+}
+
+/// The local tangent graph LTG(S) within the sensed region S.
+struct Ltg {
+    nodes: Vec<Node>,
+    adj: Vec<Vec<(usize, f64)>>,
+}
+
+/// The RoverBug navigator (see the module documentation).
+pub struct RoverBug {
+    rover: RoverConfig,
+    config: RoverBugConfig,
+    terrain: TerrainConfig,
+    mode: Mode,
+    d_leave: Option<f64>,
+    view: Option<View>,
+    obstacles: Vec<CObstacle>,
+    carried: Vec<CObstacle>,
+    /// C-obstacles around recorded hazard contacts.
+    contacts: Vec<CObstacle>,
+    /// Sign of the last motion: 1 forward, -1 reverse, 2 turn in place.
+    last_motion: Option<f64>,
+    /// Positions of the current boundary-following segment.
+    visited: Vec<Point2>,
+    waypoints: VecDeque<Point2>,
+    subpath: Vec<Point2>,
+    finish: Option<(Outcome, String)>,
+    stats: NavigatorStats,
+    steps: u32,
+    backing_out: bool,
+    drawn_wedges: Vec<Vec<Point2>>,
+    drawn_obstacles: Vec<Vec<Point2>>,
+    drawn_paths: Vec<Vec<Point2>>,
+}
+
+impl RoverBug {
+    /// A RoverBug navigator for a rover.
+    pub fn new(rover: RoverConfig, config: RoverBugConfig) -> Self {
+        // Hazard limits below the rover's true limits, as the grid navigators use.
+        let terrain = TerrainConfig {
+            cols: 81,
+            rows: 81,
+            clearance: rover.clearance * HAZARD_MARGIN,
+            max_tilt: rover.max_tilt * HAZARD_MARGIN,
+            ..TerrainConfig::for_rover(&rover)
+        };
+        Self {
+            rover,
+            config,
+            terrain,
+            mode: Mode::MotionToGoal,
+            d_leave: None,
+            view: None,
+            obstacles: Vec::new(),
+            carried: Vec::new(),
+            visited: Vec::new(),
+            contacts: Vec::new(),
+            last_motion: None,
+            waypoints: VecDeque::new(),
+            subpath: Vec::new(),
+            finish: None,
+            stats: NavigatorStats::default(),
+            steps: 0,
+            backing_out: false,
+            drawn_wedges: Vec::new(),
+            drawn_obstacles: Vec::new(),
+            drawn_paths: Vec::new(),
+        }
+    }
+
+    /// Half-angle of a mast wedge (rad).
+    fn alpha_mast(&self) -> f64 {
+        0.5 * self.rover.mast_fov
+    }
+
+    /// Far radius of a mast wedge (m).
+    fn range(&self) -> f64 {
+        self.rover.mast_range
+    }
+
+    /// Requests range images, counting every wedge (gaze control).
+    fn sense(&mut self, requests: Vec<SenseRequest>) -> NavCommand {
+        self.stats.sensing_actions += requests.len() as u64;
+        NavCommand::Sense(requests)
+    }
+
+    /// The mast pan (body frame) that centres a wedge on the world bearing `bearing`.
+    fn mast_at(pose: Pose2, bearing: f64) -> SenseRequest {
+        SenseRequest::Mast { pan: angle_diff(bearing, pose.yaw) }
+    }
+
+    /// Whether a world point lies in the region sensed from the current position.
+    fn visible(&self, p: Point2) -> bool {
+        let Some(view) = &self.view else { return false };
+        if p.dist(view.origin) <= self.config.near_visible {
+            return true;
+        }
+        view.wedges.iter().any(|w| {
+            let b = w.pose.inverse_transform(p);
+            let r = b.x.hypot(b.y);
+            r <= w.wedge.max_range && angle_diff(b.y.atan2(b.x), w.wedge.bearing).abs() <= w.wedge.half_angle
+        })
+    }
+
+    /// Whether `p` is in the interior of the conglomerate wedge: sensed, and so are the points a
+    /// few degrees to either side at the same range.
+    fn interior(&self, p: Point2) -> bool {
+        let Some(view) = &self.view else { return false };
+        let v = p.sub(view.origin);
+        // The far arc counts as interior (paper 000 section 2.2): only the bounding rays matter.
+        let (r, a) = (v.norm().min(self.range() - 1e-6), v.angle());
+        let m = self.config.interior_angle;
+        [a - m, a, a + m]
+            .iter()
+            .all(|&t| self.visible(view.origin.add(Point2::new(t.cos(), t.sin()).scale(r))))
+    }
+
+    /// Whether a point is sensed or beyond the radius at which subpaths are cut (a vertex of a
+    /// C-obstacle grown from sensed cells may lie there; the rover never drives that far).
+    fn visible_or_beyond_cut(&self, p: Point2) -> bool {
+        let Some(view) = &self.view else { return false };
+        self.visible(p) || p.dist(view.origin) > self.cut_radius()
+    }
+
+    /// Distance from the sensing position at which subpaths are cut (m).
+    fn cut_radius(&self) -> f64 {
+        (self.range() - self.config.range_buffer).max(0.5)
+    }
+
+    /// Whether the ground just past `v` on the ray from `x` is sensed and outside every
+    /// C-obstacle: the obstacle's silhouette ends at `v` within the view.
+    fn free_past(&self, x: Point2, v: Point2) -> bool {
+        let d = v.sub(x);
+        let unit = d.scale(1.0 / d.norm().max(1e-9));
+        [0.3, 0.6].iter().all(|&k| {
+            let q = v.add(unit.scale(k));
+            (self.visible(q) || q.dist(x) > self.range())
+                && !self.obstacles.iter().any(|o| o.contains_strict(q))
+        })
+    }
+
+    /// Whether the segment lies in the sensed region up to the cut radius.
+    fn segment_visible(&self, a: Point2, b: Point2) -> bool {
+        let n = (a.dist(b) / 0.2).ceil().max(1.0) as usize;
+        (0..=n).all(|i| self.visible_or_beyond_cut(a.add(b.sub(a).scale(i as f64 / n as f64))))
+    }
+
+    /// Whether segment a-b is free of every C-obstacle interior (an obstacle that contains `x`,
+    /// where noise or a late detection put the rover, does not block segments leaving `x`).
+    fn segment_free(&self, a: Point2, b: Point2, x: Point2) -> bool {
+        self.obstacles.iter().all(|o| {
+            if !o.blocks_segment(a, b) {
+                return true;
+            }
+            // From inside a C-obstacle (noise, a late detection) the rover may leave it; from
+            // inside a recorded contact (no cells) it may move out or along, never deeper in.
+            a == x
+                && o.contains_strict(x)
+                && (o.cells > 0 || {
+                    let depth = -o.signed_clearance(x);
+                    (1..=8)
+                        .all(|k| -o.signed_clearance(a.add(b.sub(a).scale(k as f64 / 8.0))) <= depth + 0.05)
+                })
+        })
+    }
+
+    /// Builds the local tangent graph from the rover at `x` toward the goal `goal`.
+    fn build_ltg(&self, x: Point2, goal: Point2) -> Ltg {
+        let mut nodes = vec![Node { p: x, vertex: None, goal_vertex: false }];
+        // T_g: toward the goal when nothing visible blocks the direct line.
+        let to_goal = goal.sub(x);
+        let dist = to_goal.norm();
+        let goal_inside = self.obstacles.iter().any(|o| o.contains_strict(goal));
+        if dist > 1e-9 && !goal_inside {
+            let reach = dist.min(self.range());
+            let tg = x.add(to_goal.scale(reach / dist));
+            if self.segment_free(x, tg, x) && self.segment_visible(x, tg) {
+                nodes.push(Node { p: tg, vertex: None, goal_vertex: false });
+            }
+        }
+        for (k, o) in self.obstacles.iter().enumerate() {
+            let goal_vertex = o.contains(goal);
+            for (i, &v) in o.vertices.iter().enumerate() {
+                let inside_other =
+                    self.obstacles.iter().enumerate().any(|(j, q)| j != k && q.contains_strict(v));
+                if !inside_other && self.visible_or_beyond_cut(v) {
+                    nodes.push(Node { p: v, vertex: Some((k, i)), goal_vertex });
+                }
+            }
+        }
+        let n = nodes.len();
+        let mut adj = vec![Vec::new(); n];
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = (nodes[i].p, nodes[j].p);
+                if a.dist(b) < 1e-9 || !self.tangent(&nodes[i], b) || !self.tangent(&nodes[j], a) {
+                    continue;
+                }
+                let (a, b) = if j == 0 { (b, a) } else { (a, b) };
+                if self.segment_free(a, b, x) && self.segment_visible(a, b) {
+                    let d = a.dist(b);
+                    adj[i].push((j, d));
+                    adj[j].push((i, d));
+                }
+            }
+        }
+        Ltg { nodes, adj }
+    }
+
+    /// Whether the line from `node` toward `other` is tangent to the node's C-obstacle at the
+    /// node: the obstacle's interior lies on one side of the line near the vertex.
+    fn tangent(&self, node: &Node, other: Point2) -> bool {
+        let Some((k, i)) = node.vertex else { return true };
+        let vs = &self.obstacles[k].vertices;
+        let n = vs.len();
+        let d = other.sub(node.p);
+        let prev = d.cross(vs[(i + n - 1) % n].sub(node.p));
+        let next = d.cross(vs[(i + 1) % n].sub(node.p));
+        prev * next >= -1e-12
+    }
+
+    /// A* over the LTG from the rover (node 0) to the goal: `allowed` nodes may end a path
+    /// with the straight-line remainder to the goal (zero from a goal vertex). Returns the node
+    /// sequence without the virtual goal.
+    fn search(&self, ltg: &Ltg, goal: Point2, allowed: &dyn Fn(&Node) -> bool) -> Option<Vec<usize>> {
+        let clear =
+            |node: &Node| node.goal_vertex || self.obstacles.iter().all(|o| !o.blocks_segment(node.p, goal));
+        self.search_with(ltg, goal, &|_, node: &Node| {
+            (allowed(node) && clear(node)).then(|| if node.goal_vertex { 0.0 } else { node.p.dist(goal) })
+        })
+    }
+
+    /// A* over the LTG from the rover (node 0) to a virtual sink: `terminal` gives the cost of
+    /// ending a path at a node (None where a path may not end). Returns the node sequence.
+    fn search_with(
+        &self,
+        ltg: &Ltg,
+        goal: Point2,
+        terminal: &dyn Fn(usize, &Node) -> Option<f64>,
+    ) -> Option<Vec<usize>> {
+        const SINK: usize = usize::MAX;
+        let mm = |d: f64| (d * 1000.0).round() as u64;
+        // The straight-line heuristic is admissible only when no path ends early at a cost below
+        // the remaining distance; goal vertices and other targets end at zero.
+        let admissible = !ltg
+            .nodes
+            .iter()
+            .enumerate()
+            .any(|(i, n)| terminal(i, n).is_some_and(|c| c < n.p.dist(goal) - 1e-9));
+        let (path, _) = pathfinding::prelude::astar(
+            &0usize,
+            |&i| {
+                let mut next: Vec<(usize, u64)> = ltg.adj[i].iter().map(|&(j, d)| (j, mm(d))).collect();
+                if i != 0
+                    && let Some(rest) = terminal(i, &ltg.nodes[i])
+                {
+                    next.push((SINK, mm(rest)));
+                }
+                next
+            },
+            |&i| {
+                if i == SINK || !admissible { 0 } else { mm(ltg.nodes[i].p.dist(goal)).saturating_sub(1) }
+            },
+            |&i| i == SINK,
+        )?;
+        Some(path.into_iter().filter(|&i| i != SINK).collect())
+    }
+
+    /// Cuts a path from `x` at the far radius of the wedge minus the buffer.
+    fn truncate(&self, path: &[Point2], x: Point2) -> Vec<Point2> {
+        let limit = self.cut_radius();
+        let mut out = vec![x];
+        for w in path.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            if b.dist(x) <= limit {
+                out.push(b);
+                continue;
+            }
+            // First point of a-b at distance `limit` from x.
+            let d = b.sub(a);
+            let f = a.sub(x);
+            let (qa, qb, qc) = (d.dot(d), 2.0 * f.dot(d), f.dot(f) - limit * limit);
+            let disc = (qb * qb - 4.0 * qa * qc).max(0.0);
+            let t = ((-qb + disc.sqrt()) / (2.0 * qa)).clamp(0.0, 1.0);
+            out.push(a.add(d.scale(t)));
+            break;
+        }
+        out
+    }
+
+    /// Queues a subpath for execution and records it for display.
+    fn execute(&mut self, path: Vec<Point2>) {
+        self.stats.plans += 1;
+        self.waypoints = path.iter().skip(1).copied().collect();
+        self.drawn_paths.push(path.clone());
+        self.subpath = path;
+    }
+
+    /// Connected groups of overlapping C-obstacles (the obstacles of the paper's "∂O").
+    fn components(&self) -> Vec<Vec<usize>> {
+        let n = self.obstacles.len();
+        let mut group: Vec<usize> = (0..n).collect();
+        fn root(g: &mut [usize], mut i: usize) -> usize {
+            while g[i] != i {
+                g[i] = g[g[i]];
+                i = g[i];
+            }
+            i
+        }
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = (&self.obstacles[i], &self.obstacles[j]);
+                let touch = a.vertices.iter().any(|&v| b.contains(v))
+                    || b.vertices.iter().any(|&v| a.contains(v))
+                    || a.vertices
+                        .iter()
+                        .enumerate()
+                        .any(|(k, &v)| b.clip_segment(v, a.vertices[(k + 1) % a.vertices.len()]).is_some());
+                if touch {
+                    let (ri, rj) = (root(&mut group, i), root(&mut group, j));
+                    group[ri] = rj;
+                }
+            }
+        }
+        let mut out: Vec<Vec<usize>> = Vec::new();
+        let mut index = vec![usize::MAX; n];
+        for i in 0..n {
+            let r = root(&mut group, i);
+            if index[r] == usize::MAX {
+                index[r] = out.len();
+                out.push(Vec::new());
+            }
+            out[index[r]].push(i);
+        }
+        out
+    }
+
+    /// The component blocking the way from `x` toward the goal (first hit along the line),
+    /// or else the one nearest to `x`.
+    fn blocking_component(&self, x: Point2, goal: Point2) -> Option<Vec<usize>> {
+        let comps = self.components();
+        let dir = goal.sub(x);
+        let far = x.add(dir.scale(self.range() / dir.norm().max(1e-9)));
+        let hit = |c: &Vec<usize>| {
+            c.iter()
+                .filter_map(|&k| self.obstacles[k].clip_segment(x, far).map(|(t0, _)| t0))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let nearest = |c: &Vec<usize>| {
+            c.iter().map(|&k| self.obstacles[k].signed_clearance(x)).fold(f64::INFINITY, f64::min)
+        };
+        let blocking = comps.iter().filter(|c| hit(c).is_finite()).min_by(|a, b| hit(a).total_cmp(&hit(b)));
+        blocking.or_else(|| comps.iter().min_by(|a, b| nearest(a).total_cmp(&nearest(b)))).cloned()
+    }
+
+    /// Exterior vertices of a component as LTG node indices.
+    fn boundary_nodes(ltg: &Ltg, comp: &[usize]) -> Vec<usize> {
+        (0..ltg.nodes.len())
+            .filter(|&i| ltg.nodes[i].vertex.is_some_and(|(k, _)| comp.contains(&k)))
+            .collect()
+    }
+
+    /// Signed angle of `p` seen from `x`, relative to the direction `reference`.
+    fn rel_angle(x: Point2, p: Point2, reference: f64) -> f64 {
+        angle_diff(p.sub(x).angle(), reference)
+    }
+
+    /// Starts a new sense-plan-act step at the current position. The C-obstacles of the last
+    /// view that lie within reach of the rover are recorded and carried over: the mast cannot
+    /// see the ground within a metre of the rover.
+    fn new_view(&mut self, pose: Pose2) {
+        let x = pose.position();
+        let reach = self.config.near_visible + 0.5;
+        self.carried = std::mem::take(&mut self.obstacles);
+        self.carried.truncate(self.carried.len().saturating_sub(self.contacts.len()));
+        self.carried.retain(|o| o.signed_clearance(x) < reach);
+        let evaluator = TerrainEvaluator::new(self.terrain.clone(), pose)
+            .expect("terrain configuration from a valid rover");
+        self.view = Some(View { evaluator, wedges: Vec::new(), origin: pose.position() });
+        self.steps += 1;
+    }
+
+    /// Folds the clouds of the last frame into the current view and rebuilds the C-obstacles.
+    fn ingest(&mut self, input: &NavInput<'_>) {
+        let pose = input.estimate.pose.pose2();
+        if self.view.is_none() {
+            self.new_view(pose);
+        }
+        let goal = input.goal.position;
+        let view = self.view.as_mut().expect("view created above");
+        for cloud in &input.frame.clouds {
+            view.wedges.push(SensedWedge { pose, wedge: cloud.wedge });
+            self.drawn_wedges.push(wedge_polygon(pose, &cloud.wedge));
+        }
+        view.evaluator.update(&input.frame.clouds, &input.estimate);
+        self.obstacles = view.evaluator.layers().c_obstacles(&self.terrain, &view.wedges, Some(goal));
+        self.obstacles.retain(|o| o.vertices.len() >= 3);
+        self.obstacles.extend(self.carried.iter().cloned());
+        self.obstacles.extend(self.contacts.iter().cloned());
+        let fresh = self.obstacles.len() - self.carried.len() - self.contacts.len();
+        for o in &self.obstacles[..fresh] {
+            self.drawn_obstacles.push(o.vertices.clone());
+        }
+    }
+
+    /// Motion-to-goal planning on the current view; false when a blocking obstacle stops it.
+    fn motion_to_goal(&mut self, x: Point2, goal: Point2) -> bool {
+        let ltg = self.build_ltg(x, goal);
+        let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
+        let Some(path) = self.search(&ltg, goal, &|n: &Node| n.goal_vertex || n.p.dist(goal) <= bound + 1e-9)
+        else {
+            return false;
+        };
+        let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
+        let sub = self.truncate(&points, x);
+        let length: f64 = sub.windows(2).map(|w| w[0].dist(w[1])).sum();
+        if length < 0.1 {
+            return false;
+        }
+        self.execute(sub);
+        true
+    }
+
+    /// Enters virtual boundary following: positive sense by the shorter side around the
+    /// blocking obstacle.
+    fn start_boundary_following(&mut self, x: Point2, goal: Point2) {
+        let ltg = self.build_ltg(x, goal);
+        let reference = goal.sub(x).angle();
+        let mut sense = 1.0;
+        if let Some(comp) = self.blocking_component(x, goal) {
+            let side = |s: f64| {
+                Self::boundary_nodes(&ltg, &comp)
+                    .into_iter()
+                    .map(|i| ltg.nodes[i].p)
+                    .max_by(|a, b| {
+                        (s * Self::rel_angle(x, *a, reference))
+                            .total_cmp(&(s * Self::rel_angle(x, *b, reference)))
+                    })
+                    .map_or(f64::INFINITY, |v| x.dist(v) + v.dist(goal))
+            };
+            if side(-1.0) < side(1.0) {
+                sense = -1.0;
+            }
+        }
+        self.mode = Mode::Virtual { sense, scans: vec![0] };
+        self.visited = vec![x];
+    }
+
+    /// The silhouette vertex of the obstacle blocking the way to the goal in the sense `s`
+    /// (+1 counter-clockwise from the goal direction): the most extreme boundary node the rover
+    /// reaches by a free tangent segment, lying in the interior of the conglomerate wedge with
+    /// sensed free ground past it. Returns the subpath to it, the boundary nodes' closest
+    /// distance to the goal and the extreme node in the other sense.
+    fn silhouette(
+        &self,
+        x: Point2,
+        goal: Point2,
+        s: f64,
+        virtual_mode: bool,
+    ) -> Option<(Vec<Point2>, f64, Point2)> {
+        let ltg = self.build_ltg(x, goal);
+        let reference = goal.sub(x).angle();
+        let comp = self.blocking_component(x, goal)?;
+        let nodes = Self::boundary_nodes(&ltg, &comp);
+        let key = |i: usize| s * Self::rel_angle(x, ltg.nodes[i].p, reference);
+        let direct: Vec<usize> = nodes
+            .iter()
+            .copied()
+            .filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i) && ltg.nodes[i].p.dist(x) > 0.1)
+            // Never back to where boundary following has already been.
+            .filter(|&i| self.visited.iter().all(|q| q.dist(ltg.nodes[i].p) > 0.3))
+            // Onward in the positive sense: on that side of the goal direction.
+            .filter(|&i| virtual_mode || key(i) > -0.05)
+            .collect();
+        let v = direct.iter().copied().max_by(|&a, &b| key(a).total_cmp(&key(b)))?;
+        let target = ltg.nodes[v].p;
+        // Virtual boundary following also needs free ground past the silhouette (the obstacle
+        // ends there); following the boundary, the next vertex of a curved boundary hides the
+        // rest of it, as the paper's farthest visible boundary vertex does.
+        if !self.interior(target) || (virtual_mode && !self.free_past(x, target)) {
+            return None;
+        }
+        let d_reach = nodes.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
+        let other =
+            nodes.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
+        // The target is a sensed node joined to the rover by a sensed free segment: no cut.
+        Some((vec![x, target], d_reach, other))
+    }
+
+    /// The most extreme node in the sense `s` (from the goal direction) joined to the rover by
+    /// a free tangent segment and away from every position of this boundary-following segment.
+    fn fallback_step(&self, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
+        let ltg = self.build_ltg(x, goal);
+        let reference = goal.sub(x).angle();
+        let key = |p: Point2| s * Self::rel_angle(x, p, reference);
+        ltg.adj[0]
+            .iter()
+            .map(|&(j, _)| ltg.nodes[j].p)
+            .filter(|p| p.dist(x) > 0.2 && self.visited.iter().all(|q| q.dist(*p) > 0.5))
+            .max_by(|a, b| key(*a).total_cmp(&key(*b)))
+            .map(|p| vec![x, p])
+    }
+
+    /// The next mast wedge of a scan that alternates sides, k = 1, -1, 2, -2, ... in units of
+    /// 2 alpha_mast from the goal direction; None once the scans overlap all around.
+    fn next_scan(&self, scans: &[i32], sense: f64) -> Option<(i32, f64)> {
+        let last = *scans.last().unwrap_or(&0);
+        let next = if last <= 0 { -last + 1 } else { -last };
+        let angle = 2.0 * self.alpha_mast() * next as f64 * sense;
+        (angle.abs() - self.alpha_mast() <= PI + 1e-9 && scans.len() <= 16).then_some((next, angle))
+    }
+
+    /// Virtual boundary following on the conglomerate wedge: move to an interior silhouette
+    /// vertex, or ask for the next mast wedge, or halt as trapped.
+    fn virtual_step(&mut self, pose: Pose2, goal: Point2) -> Option<NavCommand> {
+        let x = pose.position();
+        let Mode::Virtual { sense, scans } = self.mode.clone() else { return None };
+        if self.motion_to_goal_clear(x, goal) {
+            self.mode = Mode::MotionToGoal;
+            return None;
+        }
+        for s in [sense, -sense] {
+            if let Some((path, d_reach, v_loop)) = self.silhouette(x, goal, s, true) {
+                self.mode = Mode::Normal { sense: s, d_reach, v_loop, left_loop: false, scans: vec![0] };
+                self.execute(path);
+                return None;
+            }
+        }
+        let Some((next, angle)) = self.next_scan(&scans, sense) else {
+            return self.halt(
+                Outcome::Unreachable,
+                "trapped: the mast scans overlap all around and no boundary vertex leads out",
+            );
+        };
+        let mut scans = scans;
+        scans.push(next);
+        self.mode = Mode::Virtual { sense, scans };
+        Some(self.sense(vec![Self::mast_at(pose, goal.sub(x).angle() + angle)]))
+    }
+
+    /// Records a final outcome and returns the command that reports it.
+    fn halt(&mut self, outcome: Outcome, why: &str) -> Option<NavCommand> {
+        self.finish = Some((outcome, why.to_string()));
+        Some(NavCommand::Finish(outcome, why.to_string()))
+    }
+
+    /// Whether the direct line toward the goal is free within the view (T_g exists).
+    fn motion_to_goal_clear(&self, x: Point2, goal: Point2) -> bool {
+        let d = goal.sub(x);
+        let tg = x.add(d.scale(d.norm().min(self.range()) / d.norm().max(1e-9)));
+        !self.obstacles.iter().any(|o| o.contains_strict(goal) && o.contains(tg))
+            && self.segment_free(x, tg, x)
+            && self.segment_visible(x, tg)
+            && tg.dist(goal) <= self.d_leave.unwrap_or(f64::INFINITY) + 1e-9
+    }
+
+    /// Normal boundary following: leave when a reachable node beats `d_reach`, halt when the
+    /// loop point comes back, else move to the next silhouette vertex in the positive sense
+    /// (turning the gaze when none is in view).
+    fn normal_step(&mut self, pose: Pose2, goal: Point2) -> Option<NavCommand> {
+        let x = pose.position();
+        let Mode::Normal { sense, d_reach, v_loop, mut left_loop, scans } = self.mode.clone() else {
+            return None;
+        };
+        let ltg = self.build_ltg(x, goal);
+        // Leaving condition: a reachable node of G1 closer to the goal than d_reach.
+        let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
+        let limit = d_reach - self.config.leave_margin;
+        if let Some(path) = self.search(&ltg, goal, &|n: &Node| {
+            n.goal_vertex || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < limit)
+        }) {
+            let end = ltg.nodes[*path.last().expect("non-empty path")];
+            self.d_leave = Some(end.p.dist(goal));
+            self.mode = Mode::MotionToGoal;
+            let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
+            let sub = self.truncate(&points, x);
+            self.execute(sub);
+            return None;
+        }
+        self.visited.push(x);
+        left_loop |= x.dist(v_loop) > 2.0;
+        if left_loop && x.dist(v_loop) < 1.0 {
+            return self.halt(
+                Outcome::Unreachable,
+                "boundary following completed a loop around the obstacle (V_loop): the goal is unreachable",
+            );
+        }
+        if let Some((path, seen_reach, _)) = self.silhouette(x, goal, sense, false) {
+            let target = *path.last().expect("non-empty subpath");
+            if left_loop && target.dist(v_loop) < 1.0 {
+                return self.halt(
+                    Outcome::Unreachable,
+                    "boundary following reached V_loop again: the goal is unreachable",
+                );
+            }
+            let d_reach = d_reach.min(seen_reach);
+            self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
+            self.execute(path);
+            return None;
+        }
+        let Some((next, angle)) = self.next_scan(&scans, sense) else {
+            // The gaze has turned all around without a silhouette vertex in the interior of the
+            // conglomerate wedge (paper: abort). In clutter, step instead to the most extreme
+            // directly reachable node not yet visited; abort only when there is none.
+            if let Some(path) = self.fallback_step(x, goal, sense) {
+                self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
+                self.execute(path);
+                return None;
+            }
+            return self.halt(
+                Outcome::HelpRequested,
+                "boundary following: the scans overlap all around and no boundary vertex leads on",
+            );
+        };
+        let mut scans = scans;
+        scans.push(next);
+        self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans };
+        Some(self.sense(vec![Self::mast_at(pose, goal.sub(x).angle() + angle)]))
+    }
+
+    /// The sensing that opens a step in the current mode.
+    fn open_step(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
+        self.view = None;
+        self.new_view(pose);
+        if self.steps > self.config.max_steps {
+            self.finish =
+                Some((Outcome::HelpRequested, format!("no arrival in {} steps", self.config.max_steps)));
+            return NavCommand::Finish(Outcome::HelpRequested, self.finish.clone().unwrap().1);
+        }
+        let toward_goal = goal.sub(pose.position()).angle();
+        let mut requests = vec![Self::mast_at(pose, toward_goal)];
+        if let Mode::Normal { sense, .. } = self.mode {
+            // Also along the boundary, a quarter turn from the goal direction.
+            requests.push(Self::mast_at(pose, pose.yaw + sense * self.alpha_mast()));
+        }
+        requests.push(SenseRequest::BodyFront);
+        if let Mode::Virtual { .. } = self.mode {
+            self.mode = Mode::MotionToGoal;
+        }
+        self.sense(requests)
+    }
+
+    /// Plans after new sensing; returns a command when the mode asks for more data or halts.
+    fn plan(&mut self, pose: Pose2, goal: Point2) -> Option<NavCommand> {
+        let x = pose.position();
+        for _ in 0..3 {
+            match self.mode {
+                Mode::MotionToGoal => {
+                    if self.d_leave.is_none() {
+                        self.d_leave = Some(x.dist(goal));
+                    }
+                    if self.motion_to_goal(x, goal) {
+                        return None;
+                    }
+                    self.start_boundary_following(x, goal);
+                }
+                Mode::Virtual { .. } => {
+                    let cmd = self.virtual_step(pose, goal);
+                    if cmd.is_some() || !self.waypoints.is_empty() {
+                        return cmd;
+                    }
+                }
+                Mode::Normal { .. } => {
+                    let cmd = self.normal_step(pose, goal);
+                    if cmd.is_some() || !self.waypoints.is_empty() {
+                        return cmd;
+                    }
+                }
+            }
+        }
+        None
+    }
+}
+
+/// The outline of a sensed wedge in the world, for display.
+fn wedge_polygon(pose: Pose2, wedge: &rovernav_core::Wedge) -> Vec<Point2> {
+    let n = 8;
+    let mut out = Vec::with_capacity(2 * n + 2);
+    for i in 0..=n {
+        let a = wedge.bearing - wedge.half_angle + 2.0 * wedge.half_angle * i as f64 / n as f64;
+        out.push(pose.transform(Point2::new(a.cos(), a.sin()).scale(wedge.max_range)));
+    }
+    for i in (0..=n).rev() {
+        let a = wedge.bearing - wedge.half_angle + 2.0 * wedge.half_angle * i as f64 / n as f64;
+        out.push(pose.transform(Point2::new(a.cos(), a.sin()).scale(wedge.min_range)));
+    }
+    out
+}
+
+impl Navigator for RoverBug {
+    fn name(&self) -> &str {
+        "roverbug"
+    }
+
+    fn step(&mut self, input: &NavInput<'_>) -> NavCommand {
+        let pose = input.estimate.pose.pose2();
+        let x = pose.position();
+        let goal = input.goal.position;
+        if let Some((outcome, why)) = self.finish.clone() {
+            return NavCommand::Finish(outcome, why);
+        }
+        if x.dist(goal) <= input.goal.tolerance {
+            return NavCommand::Finish(Outcome::Reached, format!("within {:.2} m of the goal", x.dist(goal)));
+        }
+        if let Some(why) = &input.frame.motion_stopped {
+            self.waypoints.clear();
+            if why.starts_with("hazard") && !self.backing_out {
+                // Record where the body met the terrain (paper: explicitly recorded points may
+                // pass between steps), so no later subpath leads there again.
+                let half = 0.5 * self.rover.length;
+                let touched: Vec<Point2> = match self.last_motion {
+                    Some(sign) if sign.abs() < 2.0 => vec![pose.transform(Point2::new(sign * half, 0.0))],
+                    _ => vec![
+                        pose.transform(Point2::new(half, 0.5 * self.rover.width)),
+                        pose.transform(Point2::new(half, -0.5 * self.rover.width)),
+                    ],
+                };
+                for p in touched {
+                    let growth = self.terrain.growth();
+                    self.contacts.push(CObstacle::from_hull(vec![p], growth, self.terrain.max_arc_step, 0));
+                }
+                self.backing_out = true;
+                self.last_motion = Some(-1.0);
+                return NavCommand::Drive { distance: -0.3, curvature: 0.0, guard: DriveGuard::default() };
+            }
+        }
+        self.backing_out = false;
+        if !input.frame.clouds.is_empty() {
+            self.ingest(input);
+            if let Some(cmd) = self.plan(pose, goal) {
+                return cmd;
+            }
+            if let Some((outcome, why)) = self.finish.clone() {
+                return NavCommand::Finish(outcome, why);
+            }
+            if self.waypoints.is_empty() {
+                // Nothing to do from here: the goal vertex was reached, or no plan exists.
+                if self.obstacles.iter().any(|o| o.contains_strict(goal))
+                    && self
+                        .obstacles
+                        .iter()
+                        .any(|o| o.contains(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3))
+                {
+                    return NavCommand::Finish(
+                        Outcome::Reached,
+                        "at a vertex of the goal's C-obstacle".into(),
+                    );
+                }
+                self.finish = Some((Outcome::HelpRequested, "no subpath from the current view".into()));
+                return NavCommand::Finish(Outcome::HelpRequested, "no subpath from the current view".into());
+            }
+        }
+        while let Some(&next) = self.waypoints.front() {
+            if next.dist(x) < 0.05 {
+                self.waypoints.pop_front();
+                continue;
+            }
+            let error = angle_diff(next.sub(x).angle(), pose.yaw);
+            if error.abs() > self.config.turn_threshold {
+                self.last_motion = Some(2.0);
+                return NavCommand::Turn { angle: error };
+            }
+            self.waypoints.pop_front();
+            let chord = x.dist(next);
+            // The arc through `next` that starts along the current heading.
+            let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
+            let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
+            self.last_motion = Some(1.0);
+            return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
+        }
+        // Subpath done: a goal vertex reached, or a new step.
+        if self
+            .obstacles
+            .iter()
+            .any(|o| o.contains_strict(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3))
+        {
+            return NavCommand::Finish(Outcome::Reached, "at a vertex of the goal's C-obstacle".into());
+        }
+        self.open_step(pose, goal)
+    }
+
+    fn planned_path(&self) -> Vec<Point2> {
+        self.subpath.clone()
+    }
+
+    fn overlays(&self) -> Vec<Overlay> {
+        let wedges = self.drawn_wedges.iter().map(|w| Overlay::Polygon(w.clone(), OverlayKind::Wedge));
+        let obstacles =
+            self.drawn_obstacles.iter().map(|o| Overlay::Polygon(o.clone(), OverlayKind::CObstacle));
+        let paths = self.drawn_paths.iter().map(|p| Overlay::Polyline(p.clone(), OverlayKind::Plan));
+        wedges.chain(obstacles).chain(paths).collect()
+    }
+
+    fn stats(&self) -> NavigatorStats {
+        self.stats.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(cx: f64, cy: f64, h: f64) -> CObstacle {
+        let hull = vec![
+            Point2::new(cx - h, cy - h),
+            Point2::new(cx + h, cy - h),
+            Point2::new(cx + h, cy + h),
+            Point2::new(cx - h, cy + h),
+        ];
+        CObstacle::from_hull(hull, 0.0, 0.5, 1)
+    }
+
+    fn bug_with(obstacles: Vec<CObstacle>) -> RoverBug {
+        let mut bug = RoverBug::new(RoverConfig::default(), RoverBugConfig::default());
+        bug.new_view(Pose2::new(0.0, 0.0, 0.0));
+        let wedge = rovernav_core::Wedge { bearing: 0.0, half_angle: 1.2, min_range: 0.0, max_range: 5.0 };
+        bug.view.as_mut().unwrap().wedges.push(SensedWedge { pose: Pose2::new(0.0, 0.0, 0.0), wedge });
+        bug.obstacles = obstacles;
+        bug
+    }
+
+    #[test]
+    fn ltg_path_around_a_square_is_the_hand_computed_tangent_path() {
+        // Square [2,3]x[-0.5,0.5] between rover (0,0) and goal (4,0): the shortest path hugs one
+        // side: 0 -> (2,±0.5) -> (3,±0.5) -> goal, by hand |(2,0.5)| + 1 + |(1,0.5)| = 4.1796.
+        let bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
+        let goal = Point2::new(4.0, 0.0);
+        let ltg = bug.build_ltg(Point2::new(0.0, 0.0), goal);
+        let path = bug.search(&ltg, goal, &|_| true).expect("path");
+        let pts: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
+        let len: f64 = pts.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>() + pts.last().unwrap().dist(goal);
+        let expect = 2.0f64.hypot(0.5) + 1.0 + 1.0f64.hypot(0.5);
+        assert!((len - expect).abs() < 1e-3, "{len} vs {expect}: {pts:?}");
+    }
+
+    #[test]
+    fn t_g_is_added_only_when_the_line_to_the_goal_is_free() {
+        let goal = Point2::new(4.0, 0.0);
+        let free = bug_with(vec![square(2.5, 2.0, 0.5)]);
+        assert!(free.build_ltg(Point2::new(0.0, 0.0), goal).nodes.iter().any(|n| n.p.dist(goal) < 1e-9));
+        let blocked = bug_with(vec![square(2.5, 0.0, 0.5)]);
+        assert!(!blocked.build_ltg(Point2::new(0.0, 0.0), goal).nodes.iter().any(|n| n.p.dist(goal) < 1e-9));
+    }
+
+    #[test]
+    fn truncation_stops_at_the_far_radius_minus_buffer() {
+        let bug = bug_with(vec![]);
+        let x = Point2::new(0.0, 0.0);
+        let cut = bug.truncate(&[x, Point2::new(3.0, 0.0), Point2::new(3.0, 10.0)], x);
+        let last = *cut.last().unwrap();
+        assert!((last.dist(x) - 4.0).abs() < 1e-9);
+        assert!((last.x - 3.0).abs() < 1e-9 && (last.y - 7f64.sqrt()).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,334 @@
+//! SR2's reactive navigation (paper 001 sections 5.1-5.2 and 7): no maps, only the compass and
+//! odometry pose, ten forward proximity threshold sensors in three clusters and the
+//! inclinometer.
+//!
+//! - The rover drives straight at the next waypoint (then the goal), turning only when its
+//!   heading deviates from the target bearing by more than 10 deg.
+//! - A proximity cluster that triggers (rocks, or holes and cliffs, which the sensors report the
+//!   same way) starts an avoidance: back up, rotate away (counter-clockwise for the right
+//!   cluster, clockwise for the left, longer for the set-back middle cluster, whose left and
+//!   right halves choose the direction), then drive forward. The cycle repeats, rotating the
+//!   same way, until the forward leg completes without a trigger.
+//! - A tilt beyond 15 deg makes the rover turn until the slope is acceptable, drive a couple of
+//!   metres, then turn back toward the waypoint: it tacks across ridges like a sailing boat.
+//! - Diverted too far from course, or without progress for too long, it stops and asks for
+//!   help.
+//!
+//! Keep-out zones are treated like obstacles seen by the middle cluster.
+
+use crate::gestalt::keep_out_distance;
+use rovernav_core::{
+    DriveGuard, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Point2, ProximityReading,
+    RoverConfig, angle_diff,
+};
+
+/// Tunable parameters of SR2.
+#[derive(Clone, Debug)]
+pub struct Sr2Config {
+    /// Heading dead-band (rad): turn toward the target only beyond this.
+    pub dead_band: f64,
+    /// Longest straight leg between heading checks (m).
+    pub leg: f64,
+    /// Back-up distance of an avoidance (m).
+    pub backup: f64,
+    /// Rotation away from a side-cluster obstacle (rad).
+    pub side_rotation: f64,
+    /// Rotation away from a middle-cluster obstacle (rad).
+    pub middle_rotation: f64,
+    /// Forward leg that must complete without a trigger to end an avoidance (m).
+    pub clear_leg: f64,
+    /// Inclinometer tilt limit (rad).
+    pub max_tilt: f64,
+    /// How far below the limit the drive guard trips (rad).
+    pub tilt_margin: f64,
+    /// Back-up distance after a slope exception (m).
+    pub slope_backup: f64,
+    /// Heading change per slope correction (rad).
+    pub slope_turn: f64,
+    /// Distance driven across the slope before turning back toward the target (m).
+    pub tack_leg: f64,
+    /// Distance from the straight course beyond which the rover asks for help (m).
+    pub max_diversion: f64,
+    /// Distance driven without getting 0.5 m closer to the target before asking for help (m).
+    pub patience_m: f64,
+    /// Distance after an avoidance within which the next one keeps its rotation direction (m).
+    pub avoid_memory: f64,
+}
+
+impl Default for Sr2Config {
+    fn default() -> Self {
+        Self {
+            dead_band: 10f64.to_radians(),
+            leg: 1.0,
+            backup: 0.3,
+            side_rotation: 30f64.to_radians(),
+            middle_rotation: 60f64.to_radians(),
+            clear_leg: 1.5,
+            max_tilt: 15f64.to_radians(),
+            tilt_margin: 1f64.to_radians(),
+            slope_backup: 0.6,
+            slope_turn: 45f64.to_radians(),
+            tack_leg: 2.0,
+            max_diversion: 12.0,
+            patience_m: 60.0,
+            avoid_memory: 3.0,
+        }
+    }
+}
+
+/// What SR2 is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mode {
+    /// Heading for the target.
+    Cruise,
+    /// Avoiding an obstacle, rotating in the given direction (+1 counter-clockwise).
+    Avoid { phase: AvoidPhase, dir: f64, middle: bool },
+    /// Crossing a slope, turning `dir` (+1 counter-clockwise) on each slope exception.
+    Tack { dir: f64, stage: TackStage },
+}
+
+/// The phases of an avoidance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum AvoidPhase {
+    BackUp,
+    Rotate,
+    Forward,
+}
+
+/// The stages of a slope correction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum TackStage {
+    /// Backed off the slope; the turn comes next.
+    BackedOff,
+    /// Turned across the slope; the leg comes next.
+    Turned,
+    /// Driving the leg across the slope.
+    Crossing,
+}
+
+/// The SR2 navigator (see the module documentation).
+pub struct Sr2Navigator {
+    rover: RoverConfig,
+    config: Sr2Config,
+    target_index: usize,
+    leg_start: Option<Point2>,
+    mode: Mode,
+    best_distance: f64,
+    driven_since_progress: f64,
+    last_position: Option<Point2>,
+    tack_dir: Option<f64>,
+    odometer: f64,
+    /// The rotation direction of the last avoidance and the odometer when it ended.
+    last_avoid: Option<(f64, f64)>,
+    stats: NavigatorStats,
+}
+
+impl Sr2Navigator {
+    /// A navigator for a rover with the given parameters.
+    pub fn new(rover: RoverConfig, config: Sr2Config) -> Self {
+        Self {
+            rover,
+            config,
+            target_index: 0,
+            leg_start: None,
+            mode: Mode::Cruise,
+            best_distance: f64::INFINITY,
+            driven_since_progress: 0.0,
+            last_position: None,
+            tack_dir: None,
+            odometer: 0.0,
+            last_avoid: None,
+            stats: NavigatorStats::default(),
+        }
+    }
+
+    fn guard(&self) -> DriveGuard {
+        // The guard trips a little below the limit: the inclinometer is noisy and the motion
+        // stops one sample after the trip.
+        DriveGuard { proximity: true, max_tilt: Some(self.config.max_tilt - self.config.tilt_margin) }
+    }
+
+    fn drive(&self, distance: f64) -> NavCommand {
+        let guard = if distance > 0.0 { self.guard() } else { DriveGuard::default() };
+        NavCommand::Drive { distance, curvature: 0.0, guard }
+    }
+
+    /// Starts an avoidance for a proximity reading (or a virtual middle obstacle).
+    fn start_avoid(&mut self, reading: &ProximityReading, keep_dir: Option<f64>) -> NavCommand {
+        let middle = reading.middle() || !(reading.left() || reading.right());
+        let dir = keep_dir.unwrap_or_else(|| {
+            if reading.right() && !reading.left() {
+                1.0
+            } else if reading.left() && !reading.right() {
+                -1.0
+            } else {
+                // The middle cluster is split in halves to choose the rotation.
+                let left_half = reading.raw[3..5].iter().filter(|&&b| b).count();
+                let right_half = reading.raw[5..7].iter().filter(|&&b| b).count();
+                if left_half > right_half { -1.0 } else { 1.0 }
+            }
+        });
+        self.mode = Mode::Avoid { phase: AvoidPhase::BackUp, dir, middle };
+        self.drive(-self.config.backup)
+    }
+
+    /// Whether driving `distance` straight ahead from the pose would enter a keep-out zone.
+    fn keep_out_ahead(&self, input: &NavInput<'_>, distance: f64) -> bool {
+        let pose = input.estimate.pose.pose2();
+        let n = (distance / 0.1).ceil() as usize;
+        (0..=n).any(|i| {
+            let p = pose.transform(Point2::new(distance * i as f64 / n.max(1) as f64, 0.0));
+            keep_out_distance(input.goal, p) < self.rover.radius()
+        })
+    }
+
+    fn cruise(&mut self, input: &NavInput<'_>, here: Point2, target: Point2) -> NavCommand {
+        self.mode = Mode::Cruise;
+        let bearing = target.sub(here).angle();
+        let error = angle_diff(bearing, input.estimate.pose.yaw);
+        if error.abs() > self.config.dead_band {
+            return NavCommand::Turn { angle: error };
+        }
+        let distance = here.dist(target).min(self.config.leg);
+        if self.keep_out_ahead(input, distance + 0.5 * self.rover.length) {
+            return self.start_avoid(&ProximityReading { raw: [false; 10] }, None);
+        }
+        self.drive(distance)
+    }
+}
+
+impl Navigator for Sr2Navigator {
+    fn name(&self) -> &str {
+        "sr2"
+    }
+
+    fn step(&mut self, input: &NavInput<'_>) -> NavCommand {
+        let est = input.estimate.pose;
+        let here = Point2::new(est.x, est.y);
+        let goal = input.goal;
+        let targets: Vec<Point2> = goal.waypoints.iter().copied().chain([goal.position]).collect();
+        let leg_start = *self.leg_start.get_or_insert(here);
+        if let Some(last) = self.last_position {
+            self.driven_since_progress += last.dist(here);
+            self.odometer += last.dist(here);
+        }
+        self.last_position = Some(here);
+
+        // Advance through the waypoints.
+        while self.target_index < targets.len() && here.dist(targets[self.target_index]) <= goal.tolerance {
+            if self.target_index + 1 == targets.len() {
+                return NavCommand::Finish(
+                    Outcome::Reached,
+                    format!("within {:.2} m of the goal", here.dist(goal.position)),
+                );
+            }
+            self.target_index += 1;
+            self.leg_start = Some(here);
+            self.best_distance = f64::INFINITY;
+            self.tack_dir = None;
+            self.mode = Mode::Cruise;
+        }
+        let target = targets[self.target_index];
+        let from = if self.target_index == 0 { leg_start } else { self.leg_start.unwrap_or(here) };
+
+        // Asking for help: diverted too far from the straight course, or no progress.
+        let course = target.sub(from);
+        let diversion =
+            if course.norm() > 1e-9 { course.cross(here.sub(from)).abs() / course.norm() } else { 0.0 };
+        if diversion > self.config.max_diversion {
+            return NavCommand::Finish(
+                Outcome::HelpRequested,
+                format!("diverted {diversion:.1} m from the course to the next waypoint"),
+            );
+        }
+        let d = here.dist(target);
+        if d < self.best_distance - 0.5 {
+            self.best_distance = d;
+            self.driven_since_progress = 0.0;
+        } else if self.driven_since_progress > self.config.patience_m {
+            return NavCommand::Finish(
+                Outcome::HelpRequested,
+                format!("no progress in {:.0} m of driving", self.config.patience_m),
+            );
+        }
+
+        let stopped = input.frame.motion_stopped.as_deref();
+        let tilt_stop = stopped.is_some_and(|w| w.contains("tilt"));
+        let proximity_stop = stopped.is_some_and(|w| w.contains("proximity") || w.starts_with("hazard"));
+
+        if proximity_stop {
+            // Keep rotating the same way while one avoidance is under way.
+            // Keep rotating the same way while one avoidance is under way, and for a while
+            // after it: alternating directions would lead back into a half-enclosure.
+            let keep = match self.mode {
+                Mode::Avoid { dir, .. } => Some(dir),
+                _ => self
+                    .last_avoid
+                    .filter(|&(_, at)| self.odometer - at < self.config.avoid_memory)
+                    .map(|(dir, _)| dir),
+            };
+            return self.start_avoid(&input.frame.proximity, keep);
+        }
+        if tilt_stop {
+            // Too steep: turn off the fall line and cross the slope for a while.
+            let dir = match self.tack_dir {
+                Some(dir) => dir,
+                None => {
+                    // Turn toward the side that is lower under the rover (roll > 0 lifts the
+                    // left side), which leads along the slope rather than up it.
+                    let roll = input.frame.imu.last().map_or(0.0, |s| s.incl_roll);
+                    if roll > 0.0 { -1.0 } else { 1.0 }
+                }
+            };
+            // Keep tacking the same way along this ridge, as a sailing boat keeps its tack.
+            self.tack_dir = Some(dir);
+            self.mode = Mode::Tack { dir, stage: TackStage::BackedOff };
+            self.stats.plans += 1;
+            return self.drive(-self.config.slope_backup);
+        }
+
+        match self.mode {
+            Mode::Avoid { phase: AvoidPhase::BackUp, dir, middle } => {
+                self.mode = Mode::Avoid { phase: AvoidPhase::Rotate, dir, middle };
+                let angle = if middle { self.config.middle_rotation } else { self.config.side_rotation };
+                NavCommand::Turn { angle: dir * angle }
+            }
+            Mode::Avoid { phase: AvoidPhase::Rotate, dir, middle } => {
+                if self.keep_out_ahead(input, self.config.clear_leg + 0.5 * self.rover.length) {
+                    self.mode = Mode::Avoid { phase: AvoidPhase::BackUp, dir, middle };
+                    return NavCommand::Turn { angle: dir * self.config.side_rotation };
+                }
+                self.mode = Mode::Avoid { phase: AvoidPhase::Forward, dir, middle };
+                self.drive(self.config.clear_leg)
+            }
+            Mode::Avoid { phase: AvoidPhase::Forward, dir, .. } => {
+                self.last_avoid = Some((dir, self.odometer));
+                self.cruise(input, here, target)
+            }
+            Mode::Tack { stage: TackStage::Crossing, .. } => {
+                // The forward leg completed without a trigger: recompute the course.
+                self.cruise(input, here, target)
+            }
+            Mode::Tack { dir, stage: TackStage::BackedOff } => {
+                self.mode = Mode::Tack { dir, stage: TackStage::Turned };
+                NavCommand::Turn { angle: dir * self.config.slope_turn }
+            }
+            Mode::Tack { dir, stage: TackStage::Turned } => {
+                if self.keep_out_ahead(input, self.config.tack_leg + 0.5 * self.rover.length) {
+                    return self.start_avoid(&ProximityReading::default(), Some(dir));
+                }
+                self.mode = Mode::Tack { dir, stage: TackStage::Crossing };
+                self.drive(self.config.tack_leg)
+            }
+            Mode::Cruise => self.cruise(input, here, target),
+        }
+    }
+
+    fn planned_path(&self) -> Vec<Point2> {
+        Vec::new()
+    }
+
+    fn stats(&self) -> NavigatorStats {
+        self.stats.clone()
+    }
+}

@@ -1,0 +1,339 @@
+//! `rovernav eval localization`: how well the localisation layer works (issue 5).
+//!
+//! Three parts:
+//! - branch-and-bound efficiency and exactness of the maximum-likelihood matcher against
+//!   exhaustive search on rover-sized synthetic cases
+//!   ([`rovernav_localization::evaluation::bnb_efficiency`]);
+//! - matching accuracy with the simulator's stereo model: paper 002's protocol, 12 views one
+//!   metre apart in a straight line, each matched against the previous one
+//!   ([`rovernav_localization::evaluation::sequence_accuracy`]);
+//! - closed loop: a long procedural traverse driven by a navigator through the simulator with
+//!   the "ekf-ml" localiser and with dead reckoning on the same seeds, reporting the final
+//!   position error as a percentage of the distance driven.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use anyhow::Context;
+use rovernav_core::{Goal, Localizer, NavCommand, NavInput, Point2, Pose2, Pose3, RoverConfig, SenseRequest};
+use rovernav_executive::World;
+use rovernav_localization::evaluation::{BnbSetup, SequenceSetup, bnb_efficiency, sequence_accuracy};
+use rovernav_localization::{DeadReckoning, EkfMl};
+use rovernav_sim::{SensorModel, Simulator};
+use rovernav_terrain::procedural::{ClearPad, generate};
+use rovernav_terrain::{MarsYardParams, RockFieldParams, Terrain};
+
+/// Options of `rovernav eval localization`.
+#[derive(clap::Args, Debug)]
+pub struct EvalLocalizationArgs {
+    /// Print the figures as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Closed-loop seeds 1..=N.
+    #[arg(long, default_value_t = 20)]
+    seeds: u64,
+    /// Closed-loop traverse length (m, straight line from start to goal).
+    #[arg(long, default_value_t = 200.0)]
+    length: f64,
+    /// Branch-and-bound cases.
+    #[arg(long, default_value_t = 100)]
+    bnb_cases: u64,
+    /// Worker threads.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// Do not add the look-back mast wedge before each forward look (use only what the
+    /// navigator senses).
+    #[arg(long)]
+    no_look_back: bool,
+    /// Navigator of the closed loop (registry name).
+    #[arg(long, default_value = "astar-grid")]
+    navigator: String,
+}
+
+/// One closed-loop traverse with one localiser.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LoopResult {
+    /// Distance the true rover drove (m).
+    pub distance_m: f64,
+    /// Final |estimate - truth| in position (m).
+    pub error_m: f64,
+    /// Final position error squared over the estimate's position covariance (2 dof NEES).
+    pub nees: f64,
+    /// Fixes fused (ekf-ml only).
+    pub fixes_used: u64,
+    /// Fixes rejected (ekf-ml only).
+    pub fixes_rejected: u64,
+    /// Of the rejected fixes, those with a high failure probability (ekf-ml only).
+    pub rejected_uncertain: u64,
+    /// Of the rejected fixes, those on the search window's edge (ekf-ml only).
+    pub rejected_on_edge: u64,
+    /// Whether the navigator reached the goal.
+    pub reached: bool,
+}
+
+/// A long procedural yard with a start at its west end and a goal `length` metres east.
+pub fn closed_loop_world(seed: u64, length: f64) -> World {
+    let height = 40.0;
+    let start = Point2::new(10.0, height / 2.0);
+    let goal = Point2::new(10.0 + length, height / 2.0);
+    let params = MarsYardParams {
+        width_m: length + 20.0,
+        height_m: height,
+        resolution: 0.05,
+        seed,
+        rocks: RockFieldParams { abundance: 0.1, ..Default::default() },
+        clear_pads: [start, goal].iter().map(|p| ClearPad { x: p.x, y: p.y, radius: 1.0 }).collect(),
+        ..Default::default()
+    };
+    World {
+        terrain: generate(&params),
+        rover: RoverConfig::default(),
+        sensor_model: SensorModel::default(),
+        start: Pose2::new(start.x, start.y, 0.0),
+        goal: Goal { position: goal, tolerance: 1.0, waypoints: vec![], keep_out: vec![] },
+    }
+}
+
+/// Drives a world with a navigator and a localiser through the simulator; returns the result
+/// and the localiser (for its counters). With `look_back`, a mast wedge looking backwards is
+/// taken before each forward look after at least 1 m of driving (fed to the localiser only).
+pub fn drive<L: Localizer>(
+    world: &World,
+    navigator: &str,
+    mut localizer: L,
+    seed: u64,
+    look_back: bool,
+) -> anyhow::Result<(LoopResult, L)> {
+    let mut nav = rovernav_navigation::navigator_by_name(navigator, &world.rover)
+        .with_context(|| format!("unknown navigator `{navigator}`"))?;
+    let mut sim = Simulator::new(
+        world.terrain.clone(),
+        world.rover.clone(),
+        world.sensor_model.clone(),
+        world.start,
+        seed,
+    );
+    let mut frame = sim.initial_frame();
+    localizer.update(&frame);
+    let mut reached = false;
+    let mut last_look_back = 0.0;
+    for _ in 0..20_000 {
+        let input =
+            NavInput { time: sim.time(), estimate: localizer.estimate(), goal: &world.goal, frame: &frame };
+        let command = nav.step(&input);
+        if let NavCommand::Finish(outcome, _) = &command {
+            reached = matches!(outcome, rovernav_core::Outcome::Reached);
+            break;
+        }
+        // Before each new forward look, one mast wedge looking back over the terrain just
+        // crossed (what the navigator will do; seen only by the localiser here).
+        if look_back
+            && matches!(command, NavCommand::Sense(_))
+            && sim.distance_driven() - last_look_back >= 1.0
+        {
+            last_look_back = sim.distance_driven();
+            let back =
+                sim.execute(&NavCommand::Sense(vec![SenseRequest::Mast { pan: std::f64::consts::PI }]));
+            localizer.update(&back);
+        }
+        frame = sim.execute(&command);
+        localizer.update(&frame);
+        if sim.time() > 40_000.0 {
+            break;
+        }
+    }
+    let truth = sim.truth();
+    let estimate = localizer.estimate();
+    let (ex, ey) = (estimate.pose.x - truth.x, estimate.pose.y - truth.y);
+    let c = estimate.covariance;
+    let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
+    let nees = if det > 0.0 {
+        (c[1][1] * ex * ex - 2.0 * c[0][1] * ex * ey + c[0][0] * ey * ey) / det
+    } else {
+        f64::NAN
+    };
+    Ok((
+        LoopResult {
+            distance_m: sim.distance_driven(),
+            error_m: ex.hypot(ey),
+            nees,
+            reached,
+            ..Default::default()
+        },
+        localizer,
+    ))
+}
+
+/// Runs both localisers on one seed's world.
+pub fn closed_loop_seed(
+    seed: u64,
+    length: f64,
+    navigator: &str,
+    look_back: bool,
+) -> anyhow::Result<(LoopResult, LoopResult)> {
+    let world = closed_loop_world(seed, length);
+    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
+    let (mut ml, localizer) = drive(&world, navigator, EkfMl::new(&world.rover, initial), seed, look_back)?;
+    let stats = localizer.stats();
+    ml.fixes_used = stats.fixes_used;
+    ml.fixes_rejected = stats.fixes_rejected;
+    ml.rejected_uncertain = stats.rejected_uncertain;
+    ml.rejected_on_edge = stats.rejected_on_edge;
+    let (dr, _) = drive(&world, navigator, DeadReckoning::new(&world.rover, initial), seed, look_back)?;
+    Ok((ml, dr))
+}
+
+/// The simulator's mast stereo from a true pose: a small yard, one forward mast wedge.
+fn sim_sequence(seed: u64) -> anyhow::Result<rovernav_localization::evaluation::SequenceReport> {
+    let params = MarsYardParams {
+        width_m: 30.0,
+        height_m: 30.0,
+        resolution: 0.05,
+        seed,
+        rocks: RockFieldParams { abundance: 0.1, ..Default::default() },
+        clear_pads: vec![ClearPad { x: 8.0, y: 15.0, radius: 1.0 }],
+        ..Default::default()
+    };
+    let terrain: Terrain = generate(&params);
+    let rover = RoverConfig::default();
+    let model = SensorModel::default();
+    let truth: Vec<Pose3> = (0..12)
+        .map(|i| {
+            let start = Pose2::new(8.0 + f64::from(i), 15.0, 0.0);
+            Simulator::new(terrain.clone(), rover.clone(), model.clone(), start, seed).truth()
+        })
+        .collect();
+    let sense = |pose: &Pose3, s: u64| {
+        let mut sim = Simulator::new(terrain.clone(), rover.clone(), model.clone(), pose.pose2(), s);
+        let frame = sim.execute(&NavCommand::Sense(vec![SenseRequest::Mast { pan: 0.0 }]));
+        frame.clouds.into_iter().flat_map(|c| c.points).collect::<Vec<_>>()
+    };
+    Ok(sequence_accuracy(sense, &truth, &SequenceSetup::default(), seed, 2)?)
+}
+
+/// Runs the evaluation and prints its figures.
+pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let bnb = bnb_efficiency(&BnbSetup::default(), 0, args.bnb_cases, args.threads)?;
+    let bnb_s = started.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut downrange = 0.0;
+    let mut crossrange = 0.0;
+    let mut within = 0.0;
+    let sequences = 3u64;
+    for seed in 1..=sequences {
+        let r = sim_sequence(seed)?;
+        downrange += r.mean_abs_downrange / sequences as f64;
+        crossrange += r.mean_abs_crossrange / sequences as f64;
+        within += r.within_three_sigma / sequences as f64;
+    }
+    let sequence_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let next = AtomicU64::new(1);
+    let results: Mutex<Vec<(u64, LoopResult, LoopResult)>> = Mutex::new(Vec::new());
+    let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
+    std::thread::scope(|s| {
+        for _ in 0..args.threads.max(1) {
+            s.spawn(|| {
+                loop {
+                    let seed = next.fetch_add(1, Ordering::SeqCst);
+                    if seed > args.seeds {
+                        break;
+                    }
+                    match closed_loop_seed(seed, args.length, &args.navigator, !args.no_look_back) {
+                        Ok((ml, dr)) => results.lock().expect("results").push((seed, ml, dr)),
+                        Err(e) => *failure.lock().expect("failure") = Some(e),
+                    }
+                }
+            });
+        }
+    });
+    if let Some(e) = failure.into_inner().expect("failure") {
+        return Err(e);
+    }
+    let mut results = results.into_inner().expect("results");
+    results.sort_by_key(|r| r.0);
+    let loop_s = t.elapsed().as_secs_f64();
+    let pct = |f: &dyn Fn(&(u64, LoopResult, LoopResult)) -> &LoopResult| {
+        let n = results.len().max(1) as f64;
+        results.iter().map(|r| 100.0 * f(r).error_m / f(r).distance_m.max(1e-9)).sum::<f64>() / n
+    };
+    let ml_pct = pct(&|r| &r.1);
+    let dr_pct = pct(&|r| &r.2);
+    let n = results.len().max(1) as f64;
+    let nees = results.iter().map(|r| r.1.nees).filter(|v| v.is_finite()).sum::<f64>() / n;
+    let within_3sigma = results.iter().filter(|r| r.1.nees <= 11.8).count() as f64 / n;
+    let fixes_used: u64 = results.iter().map(|r| r.1.fixes_used).sum();
+    let fixes_rejected: u64 = results.iter().map(|r| r.1.fixes_rejected).sum();
+    let distance = results.iter().map(|r| r.1.distance_m).sum::<f64>() / n;
+    let reached = results.iter().filter(|r| r.1.reached).count();
+
+    let figures = serde_json::json!({
+        "bnb_cases": bnb.cases,
+        "bnb_exact": bnb.all_exact(),
+        "bnb_exact_cases": bnb.exact,
+        "bnb_eval_ratio": bnb.evaluation_ratio(),
+        "bnb_pose_ratio": bnb.lattice_poses as f64 / bnb.poses_tested.max(1) as f64,
+        "bnb_lattice_poses": bnb.lattice_poses,
+        "bnb_evaluations": bnb.evaluations,
+        "bnb_poses_tested": bnb.poses_tested,
+        "mean_abs_err_downrange_m": downrange,
+        "mean_abs_err_crossrange_m": crossrange,
+        "sequence_within_three_sigma": within,
+        "closed_loop_seeds": results.len(),
+        "closed_loop_reached": reached,
+        "closed_loop_mean_distance_m": distance,
+        "closed_loop_err_pct": ml_pct,
+        "dead_reckoning_err_pct": dr_pct,
+        "covariance_consistency": nees,
+        "closed_loop_within_3_sigma": within_3sigma,
+        "fixes_used": fixes_used,
+        "fixes_rejected": fixes_rejected,
+        "wall_time_s": { "bnb": bnb_s, "sequence": sequence_s, "closed_loop": loop_s },
+    });
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&figures)?);
+    } else {
+        println!(
+            "branch and bound: {}/{} cases exact; {:.1}x fewer evaluations (cell bounds + poses) and {:.1}x fewer \
+             single poses than exhaustive search ({} lattice poses) [{bnb_s:.1} s]",
+            bnb.exact,
+            bnb.cases,
+            bnb.evaluation_ratio(),
+            bnb.lattice_poses as f64 / bnb.poses_tested.max(1) as f64,
+            bnb.lattice_poses
+        );
+        println!(
+            "sim stereo sequence (12 views 1 m apart, {sequences} yards): mean |error| downrange {:.1} cm, \
+             crossrange {:.1} cm; {:.0}% within 3 sigma [{sequence_s:.1} s]",
+            100.0 * downrange,
+            100.0 * crossrange,
+            100.0 * within
+        );
+        println!(
+            "closed loop ({} seeds, {:.0} m yard, {}, {reached} reached, {distance:.0} m driven on average): \
+             ekf-ml {ml_pct:.2}% of distance, dead reckoning {dr_pct:.2}%; fixes used {fixes_used}, rejected \
+             {fixes_rejected}; mean final NEES {nees:.2} (2 expected) [{loop_s:.1} s]",
+            results.len(),
+            args.length,
+            args.navigator
+        );
+        for (seed, ml, dr) in &results {
+            println!(
+                "  seed {seed}: driven {:.1} m, ekf-ml {:.3} m ({} fixes, {} rejected: {} uncertain, {} on the \
+                 window edge), dead reckoning {:.3} m",
+                ml.distance_m,
+                ml.error_m,
+                ml.fixes_used,
+                ml.fixes_rejected,
+                ml.rejected_uncertain,
+                ml.rejected_on_edge,
+                dr.error_m
+            );
+        }
+    }
+    Ok(())
+}
