@@ -449,7 +449,8 @@ mod tests {
     #[test]
     fn world_map_removes_the_height_offset_of_overlapping_clouds() {
         let mut map = WorldElevation::default();
-        let flat: Vec<[f64; 3]> = (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0]).collect();
+        let flat: Vec<[f64; 3]> =
+            (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0]).collect();
         map.add(&flat, 0.1);
         let raised: Vec<[f64; 3]> = flat.iter().map(|p| [p[0], p[1], p[2] + 0.3]).collect();
         map.add(&raised, 0.1);

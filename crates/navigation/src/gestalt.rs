@@ -573,8 +573,12 @@ impl Navigator for GestaltNavigator {
                 }
             }
         }
-        if d < self.best_distance - 0.25 {
-            self.best_distance = d;
+        // Progress is measured the way the waypoint vote measures distance to go: along the
+        // Field D* route when assisted (a detour around a cluster is progress there). A map
+        // update that lengthens the route restarts the count from the new value.
+        let to_go = self.cost_to_goal(here, goal);
+        if to_go < self.best_distance - 0.25 || to_go > self.best_distance + 2.0 {
+            self.best_distance = to_go;
             self.steps_without_progress = 0;
         } else {
             self.steps_without_progress += 1;

@@ -52,7 +52,7 @@ pub struct NatConfig {
 impl Default for NatConfig {
     fn default() -> Self {
         Self {
-            step: 0.6,
+            step: 1.0,
             influence: 1.5,
             gain: 1.5,
             spin_distance: 0.5,
@@ -78,6 +78,8 @@ pub struct NatNavigator {
     best_distance: f64,
     cycles_without_progress: u32,
     backing_out: bool,
+    /// Whether the last motion was a turn in place.
+    turned: bool,
     stats: NavigatorStats,
 }
 
@@ -93,6 +95,7 @@ impl NatNavigator {
             best_distance: f64::INFINITY,
             cycles_without_progress: 0,
             backing_out: false,
+            turned: true,
             stats: NavigatorStats::default(),
         }
     }
@@ -181,18 +184,25 @@ impl NatNavigator {
         let here = pose.position();
         let n = (distance.abs() / 0.05).ceil().max(1.0) as usize;
         let blind = 0.5 * self.rover.length;
+        // The cameras miss a band of ground just ahead of the body (see gestalt.rs).
+        let unseen_band = blind + 0.3;
         (1..=n).all(|i| {
             let p = arc_pose(pose, curvature, distance * i as f64 / n as f64).position();
-            let near = p.dist(here) < blind;
-            (near || !terrain.is_grown_hazard(p))
+            let d = p.dist(here);
+            (d < blind || !terrain.is_grown_hazard(p))
                 && keep_out_distance(input.goal, p) >= self.rover.radius()
-                && (near || terrain.world().is_sensed(p.x, p.y))
+                && (d < unseen_band || terrain.world().is_sensed(p.x, p.y))
         })
     }
 
+    /// Images the terrain: the front body pair and one mast wedge ahead after a drive, the
+    /// whole mast fan after a turn (the view changed).
     fn sense(&mut self) -> NavCommand {
-        let mut requests: Vec<SenseRequest> =
-            self.config.mast_fan.iter().map(|&pan| SenseRequest::Mast { pan }).collect();
+        let mut requests: Vec<SenseRequest> = if self.turned {
+            self.config.mast_fan.iter().map(|&pan| SenseRequest::Mast { pan }).collect()
+        } else {
+            vec![SenseRequest::Mast { pan: 0.0 }]
+        };
         requests.push(SenseRequest::BodyFront);
         self.stats.sensing_actions += requests.len() as u64;
         self.need_sense = false;
@@ -258,6 +268,29 @@ impl Navigator for NatNavigator {
         }
         self.need_sense = true;
         self.stats.plans += 1;
+        let command = self.decide(input, pose, d);
+        self.turned = !matches!(command, NavCommand::Drive { .. });
+        command
+    }
+
+    fn overlays(&self) -> Vec<Overlay> {
+        self.terrain
+            .as_ref()
+            .map(|t| {
+                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
+            })
+            .unwrap_or_default()
+    }
+
+    fn stats(&self) -> NavigatorStats {
+        self.stats.clone()
+    }
+}
+
+impl NatNavigator {
+    /// Heading and speed from the fields, checked against the map.
+    fn decide(&mut self, input: &NavInput<'_>, pose: Pose2, d: f64) -> NavCommand {
+        let here = pose.position();
         let (field, spin) = self.field(here, input);
         let magnitude = field.norm();
         // Speed follows the field magnitude: slow where fields oppose the goal pull.
@@ -284,19 +317,6 @@ impl Navigator for NatNavigator {
         }
         // Boxed in by what is known: turn to look elsewhere.
         NavCommand::Turn { angle: -spin }
-    }
-
-    fn overlays(&self) -> Vec<Overlay> {
-        self.terrain
-            .as_ref()
-            .map(|t| {
-                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
-            })
-            .unwrap_or_default()
-    }
-
-    fn stats(&self) -> NavigatorStats {
-        self.stats.clone()
     }
 }
 

@@ -56,6 +56,10 @@ pub struct RoverBugConfig {
     pub near_visible: f64,
     /// Steps (sense-plan-act cycles) before asking for help.
     pub max_steps: u32,
+    /// Wedges sensed in all before asking for help.
+    pub max_wedges: u64,
+    /// Hazard contacts recorded around one place before asking for help.
+    pub max_contacts_here: usize,
 }
 
 impl Default for RoverBugConfig {
@@ -67,6 +71,8 @@ impl Default for RoverBugConfig {
             interior_angle: 4f64.to_radians(),
             near_visible: 1.0,
             max_steps: 200,
+            max_wedges: 300,
+            max_contacts_here: 6,
         }
     }
 }
@@ -179,6 +185,10 @@ impl RoverBug {
 
     /// Requests range images, counting every wedge (gaze control).
     fn sense(&mut self, requests: Vec<SenseRequest>) -> NavCommand {
+        if self.stats.sensing_actions >= self.config.max_wedges {
+            let why = format!("no arrival after {} wedges sensed", self.stats.sensing_actions);
+            return self.finish_now(Outcome::HelpRequested, &why);
+        }
         self.stats.sensing_actions += requests.len() as u64;
         NavCommand::Sense(requests)
     }
@@ -473,9 +483,13 @@ impl RoverBug {
         self.carried = std::mem::take(&mut self.obstacles);
         self.carried.truncate(self.carried.len().saturating_sub(self.contacts.len()));
         self.carried.retain(|o| o.signed_clearance(x) < reach);
-        let evaluator = TerrainEvaluator::new(self.terrain.clone(), pose)
-            .expect("terrain configuration from a valid rover");
-        self.view = Some(View { evaluator, wedges: Vec::new(), origin: pose.position() });
+        self.view = match TerrainEvaluator::new(self.terrain.clone(), pose) {
+            Ok(evaluator) => Some(View { evaluator, wedges: Vec::new(), origin: pose.position() }),
+            Err(e) => {
+                self.finish = Some((Outcome::Aborted, format!("terrain configuration of the rover: {e}")));
+                None
+            }
+        };
         self.steps += 1;
     }
 
@@ -486,7 +500,7 @@ impl RoverBug {
             self.new_view(pose);
         }
         let goal = input.goal.position;
-        let view = self.view.as_mut().expect("view created above");
+        let Some(view) = self.view.as_mut() else { return };
         for cloud in &input.frame.clouds {
             view.wedges.push(SensedWedge { pose, wedge: cloud.wedge });
             self.drawn_wedges.push(wedge_polygon(pose, &cloud.wedge));
@@ -638,9 +652,14 @@ impl RoverBug {
     }
 
     /// Records a final outcome and returns the command that reports it.
-    fn halt(&mut self, outcome: Outcome, why: &str) -> Option<NavCommand> {
+    fn finish_now(&mut self, outcome: Outcome, why: &str) -> NavCommand {
         self.finish = Some((outcome, why.to_string()));
-        Some(NavCommand::Finish(outcome, why.to_string()))
+        NavCommand::Finish(outcome, why.to_string())
+    }
+
+    /// [`Self::finish_now`] for the planning functions that may return a command.
+    fn halt(&mut self, outcome: Outcome, why: &str) -> Option<NavCommand> {
+        Some(self.finish_now(outcome, why))
     }
 
     /// Whether the direct line toward the goal is free within the view (T_g exists).
@@ -721,10 +740,12 @@ impl RoverBug {
     fn open_step(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
         self.view = None;
         self.new_view(pose);
+        if let Some((outcome, why)) = self.finish.clone() {
+            return NavCommand::Finish(outcome, why);
+        }
         if self.steps > self.config.max_steps {
-            self.finish =
-                Some((Outcome::HelpRequested, format!("no arrival in {} steps", self.config.max_steps)));
-            return NavCommand::Finish(Outcome::HelpRequested, self.finish.clone().unwrap().1);
+            let why = format!("no arrival in {} steps", self.config.max_steps);
+            return self.finish_now(Outcome::HelpRequested, &why);
         }
         let toward_goal = goal.sub(pose.position()).angle();
         let mut requests = vec![Self::mast_at(pose, toward_goal)];
@@ -818,6 +839,11 @@ impl Navigator for RoverBug {
                     let growth = self.terrain.growth();
                     self.contacts.push(CObstacle::from_hull(vec![p], growth, self.terrain.max_arc_step, 0));
                 }
+                let here = self.contacts.iter().filter(|o| o.hull.iter().any(|h| h.dist(x) < 0.6)).count();
+                if here >= self.config.max_contacts_here {
+                    return self
+                        .finish_now(Outcome::HelpRequested, "repeated hazard contacts at the same place");
+                }
                 self.backing_out = true;
                 self.last_motion = Some(-1.0);
                 return NavCommand::Drive { distance: -0.3, curvature: 0.0, guard: DriveGuard::default() };
@@ -826,6 +852,9 @@ impl Navigator for RoverBug {
         self.backing_out = false;
         if !input.frame.clouds.is_empty() {
             self.ingest(input);
+            if let Some((outcome, why)) = self.finish.clone() {
+                return NavCommand::Finish(outcome, why);
+            }
             if let Some(cmd) = self.plan(pose, goal) {
                 return cmd;
             }

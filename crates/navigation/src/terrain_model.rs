@@ -43,16 +43,7 @@ pub struct TerrainModel {
 impl TerrainModel {
     /// An empty model over `geometry` for a rover.
     pub fn new(rover: &RoverConfig, geometry: GridGeometry, safety_buffer: f64) -> Self {
-        // Hazard limits sit below the rover's true limits: range noise and the wheels settling
-        // into relief can turn a rock that measures exactly the clearance into belly contact.
-        let config = TerrainConfig {
-            safety_buffer,
-            clearance: rover.clearance * HAZARD_MARGIN,
-            max_tilt: rover.max_tilt * HAZARD_MARGIN,
-            resolution: T_GRID_RESOLUTION,
-            hazards_from_cell_max: false,
-            ..TerrainConfig::for_rover(rover)
-        };
+        let config = Self::perception_config(rover, safety_buffer);
         let (cx, cy) =
             (geometry.origin_x + geometry.width_m() / 2.0, geometry.origin_y + geometry.height_m() / 2.0);
         let evaluator = TerrainEvaluator::new(config.clone(), rovernav_core::Pose2::new(cx, cy, 0.0))
@@ -65,6 +56,20 @@ impl TerrainModel {
             grown: Grid2::filled(geometry, false),
             growth: config.growth(),
             config,
+        }
+    }
+
+    /// The terrain-assessment settings navigators use for a rover.
+    ///
+    /// Hazard limits sit below the rover's true limits: range noise and the wheels settling into
+    /// relief can turn a rock that measures exactly the clearance into belly contact.
+    pub fn perception_config(rover: &RoverConfig, safety_buffer: f64) -> TerrainConfig {
+        TerrainConfig {
+            safety_buffer,
+            clearance: rover.clearance * HAZARD_MARGIN,
+            max_tilt: rover.max_tilt * HAZARD_MARGIN,
+            resolution: T_GRID_RESOLUTION,
+            ..TerrainConfig::for_rover(rover)
         }
     }
 

@@ -1,6 +1,7 @@
 //! `rovernav`: run autonomous rover traverses, benchmarks and evaluations from the command line.
 
 mod bench;
+mod eval_terrain;
 mod output;
 
 use clap::{Parser, Subcommand};
@@ -24,6 +25,15 @@ enum Command {
     /// Planner benchmarks on MovingAI maps and PGM cost maps.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Evaluations against simulator truth.
+    #[command(subcommand)]
+    Eval(EvalCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum EvalCommand {
+    /// Terrain assessment: hazard recall, false hazards and elevation error on the default yard.
+    Terrain(eval_terrain::EvalTerrainArgs),
 }
 
 /// Options of `rovernav run`.
@@ -51,6 +61,7 @@ fn main() -> ExitCode {
         None => run(RunArgs::default()),
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(cmd)) => bench::run(cmd),
+        Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

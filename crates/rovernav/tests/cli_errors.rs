@@ -1,0 +1,89 @@
+//! Bad input ends with a non-zero exit and one line naming the file and field, never a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn rovernav(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_rovernav")).args(args).output().expect("binary runs");
+    (out.status.success(), String::from_utf8_lossy(&out.stderr).trim().to_string())
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rovernav-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn assert_one_line_error(ok: bool, stderr: &str, must_contain: &[&str]) {
+    assert!(!ok, "expected failure, stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "not one line: {stderr}");
+    for s in must_contain {
+        assert!(stderr.contains(s), "`{s}` missing from: {stderr}");
+    }
+}
+
+fn write_mission(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+const DEFAULT: &str = include_str!("../../../missions/default.toml");
+
+#[test]
+fn missing_mission_file_is_named() {
+    let (ok, err) = rovernav(&["run", "/nonexistent/mission.toml"]);
+    assert_one_line_error(ok, &err, &["/nonexistent/mission.toml"]);
+}
+
+#[test]
+fn invalid_toml_names_file_and_line() {
+    let dir = temp_dir("toml");
+    let path = write_mission(&dir, "bad.toml", &DEFAULT.replace("seed = 1", "seed = = 1"));
+    let (ok, err) = rovernav(&["run", &path, "--out", dir.join("out").to_str().unwrap()]);
+    assert_one_line_error(ok, &err, &["bad.toml", "line "]);
+    assert!(!dir.join("out/report.json").exists(), "no output on bad input");
+}
+
+#[test]
+fn unknown_navigator_names_the_field() {
+    let dir = temp_dir("nav");
+    let path = write_mission(&dir, "nav.toml", &DEFAULT.replace("\"astar-grid\"", "\"warp-drive\""));
+    let (ok, err) = rovernav(&["run", &path]);
+    assert_one_line_error(ok, &err, &["nav.toml", "navigator", "warp-drive"]);
+    let (ok, err) = rovernav(&["run", "--navigator", "warp-drive"]);
+    assert_one_line_error(ok, &err, &["--navigator", "warp-drive"]);
+}
+
+#[test]
+fn missing_dem_names_the_file_and_field() {
+    let dir = temp_dir("dem");
+    let text = "name = \"m\"\n[terrain]\nkind = \"dem\"\npath = \"/nonexistent/dem.tif\"\n[start]\nx = 1.0\ny = 1.0\n[goal]\nx = 5.0\ny = 5.0\n";
+    let path = write_mission(&dir, "dem.toml", text);
+    let (ok, err) = rovernav(&["run", &path]);
+    assert_one_line_error(ok, &err, &["dem.toml", "terrain.path", "/nonexistent/dem.tif"]);
+}
+
+#[test]
+fn corrupt_geotiff_names_the_file() {
+    let dir = temp_dir("tif");
+    let tif = dir.join("corrupt.tif");
+    let mut bytes = b"II*\0\x08\0\0\0".to_vec();
+    bytes.extend((0..500u32).map(|i| (i * 37 % 251) as u8));
+    std::fs::write(&tif, bytes).unwrap();
+    let text = format!(
+        "name = \"m\"\n[terrain]\nkind = \"dem\"\npath = \"{}\"\n[start]\nx = 1.0\ny = 1.0\n[goal]\nx = 5.0\ny = 5.0\n",
+        tif.display()
+    );
+    let path = write_mission(&dir, "tif.toml", &text);
+    let (ok, err) = rovernav(&["run", &path]);
+    assert_one_line_error(ok, &err, &["tif.toml", "corrupt.tif"]);
+}
+
+#[test]
+fn unknown_command_fails() {
+    let out = Command::new(env!("CARGO_BIN_EXE_rovernav")).arg("fly").output().unwrap();
+    assert!(!out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}
