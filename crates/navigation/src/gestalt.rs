@@ -1,6 +1,7 @@
 //! GESTALT local navigation, alone or assisted by Field D* (paper 003 section 2).
 //!
-//! Every cycle the rover images the terrain ahead (three mast wedges and the front body pair),
+//! Every cycle the rover images the terrain ahead (the front body pair plus one mast wedge
+//! toward the goal, or the three-wedge mast fan after a turn or back-up),
 //! folds the range data into a goodness map (GESTALT goodness, 0..1, evaluated with the hazard
 //! margin of [`crate::terrain_model::HAZARD_MARGIN`]), and scores a fixed set of candidate
 //! arcs: turns in place, forward arcs of several curvatures and a straight back-up. Each arc
@@ -8,7 +9,11 @@
 //! along the arc, which is the worst footprint it sweeps, since goodness rates the rover's
 //! footprint centred on each cell), a steering-bias vote (small curvature changes are
 //! preferred) and a waypoint vote (progress toward the goal). The weighted merge picks the arc,
-//! which is driven one step (0.5 m), provided its end lies in sensed terrain.
+//! which is driven one step (0.5 m), provided its end lies in sensed terrain. Hazards (the
+//! grown hazard layer, and keep-out zones) on the driven part or within 0.3 m past its end
+//! veto an arc; farther along the look-ahead they only lower its vote. A turn in place is
+//! scored as the turn followed by a straight step. After 80 steps without progress the rover
+//! asks for help, and its step budget ends the traverse.
 //!
 //! In `gestalt+field-dstar` the waypoint vote becomes the drop of the Field D* cost-to-goal
 //! from the rover to the arc's end, computed on a global map that combines the sensed goodness

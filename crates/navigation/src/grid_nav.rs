@@ -11,9 +11,9 @@
 use crate::terrain_model::{CostMode, TerrainModel};
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
-    Point2, RoverConfig, SenseRequest, angle_diff,
+    Point2, Pose2, RoverConfig, SenseRequest, angle_diff,
 };
-use rovernav_planning::{Cell, GlobalPlanner, PlanError, planner_by_name};
+use rovernav_planning::{Cell, GlobalPlanner, PlanError, SegmentDriverConfig, planner_by_name, segment_path};
 use std::collections::VecDeque;
 
 /// Tunable parameters of the grid navigator.
@@ -156,42 +156,36 @@ impl GridNavigator {
         }
         self.plan = world.clone();
 
-        // Walk the path while it stays in sensed, hazard-free terrain, up to the step length.
+        // The segment driver keeps the part of the plan (cut at the step length) that lies in
+        // assessed, passable terrain and straightens it into segments.
         let terrain = self.terrain.as_ref().expect("map initialised");
-        let mut prefix = vec![from];
-        let mut travelled = 0.0;
-        let step = 0.05;
-        let mut stop_point = None;
-        'walk: for w in world.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let len = a.dist(b);
-            let n = (len / step).ceil().max(1.0) as usize;
-            for i in 1..=n {
-                let p = a.add(b.sub(a).scale(i as f64 / n as f64));
-                // The cells under the rover itself may be unsensed (the cameras look ahead).
-                let near_rover = p.dist(from) < 0.3;
-                let passable = grid.cost_at_point(grid.world_to_grid(p)).is_finite();
-                if !(near_rover || terrain.is_assessed(p) && passable) {
-                    stop_point = Some(p);
-                    break 'walk;
-                }
-                travelled += len / n as f64;
-                if travelled >= self.config.max_step {
-                    prefix.push(p);
-                    break 'walk;
-                }
-            }
-            prefix.push(b);
-        }
+        let step_path = truncate_polyline(&world, self.config.max_step);
+        let safe = |p: Point2| {
+            // The cells under the rover itself may be unsensed (the cameras look ahead).
+            let near_rover = p.dist(from) < 0.3;
+            let passable = grid.cost_at_point(grid.world_to_grid(p)).is_finite();
+            near_rover || terrain.is_assessed(p) && passable
+        };
+        let driver = SegmentDriverConfig {
+            turn_threshold: self.config.turn_threshold,
+            collinear_tolerance: 0.03,
+            ..Default::default()
+        };
+        let segments = segment_path(Pose2::new(from.x, from.y, 0.0), &step_path, safe, &driver);
         // Look where the plan leaves sensed terrain (or toward the goal).
-        let look_at = stop_point.unwrap_or(goal);
+        let look_at =
+            if segments.complete { goal } else { step_path[segments.sensed_points.min(step_path.len() - 1)] };
         self.look_bearing = Some(look_at.sub(from).angle());
-        let prefix = simplify(&prefix, 0.03);
-        let length: f64 = prefix.windows(2).map(|w| w[0].dist(w[1])).sum();
+        let length: f64 = std::iter::once(from)
+            .chain(segments.waypoints.iter().copied())
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| w[0].dist(w[1]))
+            .sum();
         if length < 0.15 {
             return;
         }
-        self.waypoints.extend(prefix.into_iter().skip(1));
+        self.waypoints.extend(segments.waypoints);
     }
 
     fn sense(&mut self, heading: f64, bearing: f64) -> NavCommand {
@@ -204,31 +198,20 @@ impl GridNavigator {
     }
 }
 
-/// Drops points that lie within `tolerance` of the chord between their neighbours
-/// (Douglas-Peucker), so that the segment driver sees straight segments.
-fn simplify(points: &[Point2], tolerance: f64) -> Vec<Point2> {
-    if points.len() < 3 {
-        return points.to_vec();
-    }
-    let (a, b) = (points[0], points[points.len() - 1]);
-    let chord = b.sub(a);
-    let len = chord.norm();
-    let (mut worst, mut index) = (0.0, 0);
-    for (i, p) in points.iter().enumerate().take(points.len() - 1).skip(1) {
-        let d = if len > 1e-9 { chord.cross(p.sub(a)).abs() / len } else { p.dist(a) };
-        if d > worst {
-            worst = d;
-            index = i;
+/// The polyline cut after `length` metres.
+fn truncate_polyline(points: &[Point2], length: f64) -> Vec<Point2> {
+    let mut out = vec![points[0]];
+    let mut left = length;
+    for w in points.windows(2) {
+        let d = w[0].dist(w[1]);
+        if d >= left {
+            out.push(w[0].add(w[1].sub(w[0]).scale(left / d.max(1e-12))));
+            return out;
         }
+        left -= d;
+        out.push(w[1]);
     }
-    if worst <= tolerance {
-        return vec![a, b];
-    }
-    let mut left = simplify(&points[..=index], tolerance);
-    let right = simplify(&points[index..], tolerance);
-    left.pop();
-    left.extend(right);
-    left
+    out
 }
 
 impl Navigator for GridNavigator {
@@ -358,13 +341,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn simplify_keeps_corners_and_drops_collinear_points() {
-        let pts: Vec<Point2> = (0..=10)
-            .map(|i| Point2::new(i as f64 * 0.1, 0.0))
-            .chain((1..=10).map(|i| Point2::new(1.0, i as f64 * 0.1)))
-            .collect();
-        let s = simplify(&pts, 0.01);
-        assert_eq!(s.len(), 3);
-        assert!(s[1].dist(Point2::new(1.0, 0.0)) < 1e-9);
+    fn truncated_polyline_has_the_requested_length() {
+        let pts = [Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(1.0, 3.0)];
+        let cut = truncate_polyline(&pts, 2.5);
+        let len: f64 = cut.windows(2).map(|w| w[0].dist(w[1])).sum();
+        assert!((len - 2.5).abs() < 1e-12);
+        assert!(cut.last().unwrap().dist(Point2::new(1.0, 1.5)) < 1e-12);
+        assert_eq!(truncate_polyline(&pts, 10.0).len(), 3);
     }
 }

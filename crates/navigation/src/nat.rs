@@ -52,7 +52,7 @@ pub struct NatConfig {
 impl Default for NatConfig {
     fn default() -> Self {
         Self {
-            step: 1.0,
+            step: 0.6,
             influence: 1.5,
             gain: 1.5,
             spin_distance: 0.5,

@@ -17,6 +17,9 @@ pub const T_GRID_RESOLUTION: f64 = 0.1;
 /// Cost per metre of leaving a grown hazard the rover finds itself in.
 const ESCAPE_COST: f32 = 50.0;
 
+/// Cost per metre of a cell MRPTA grades not traversable but the hazard model does not block.
+const BLOCKED_GRADE_COST: f32 = 30.0;
+
 /// How unknown and sensed cells are costed for the planner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CostMode {
@@ -190,6 +193,12 @@ impl TerrainModel {
                         && ((rover_trapped && p.dist(rover) <= escape_radius)
                             || (goal_covered && p.dist(goal) <= escape_radius));
                     let _ = grid.set_cost(cell, if escapable { ESCAPE_COST } else { f32::INFINITY });
+                }
+                if mode == CostMode::Traversability && !*self.grown.get(c, r) && grid.is_blocked(cell) {
+                    // MRPTA grades cells "not traversable" from roughness and neighbourhood
+                    // too; only the step/slope hazards (grown) are walls, the rest is just
+                    // the most expensive terrain, so noise cannot wall the rover in.
+                    let _ = grid.set_cost(cell, BLOCKED_GRADE_COST);
                 }
                 if mode == CostMode::Optimistic {
                     grid.set_sensed(cell, *self.assessed.get(c, r));

@@ -1,6 +1,7 @@
 //! `rovernav`: run autonomous rover traverses, benchmarks and evaluations from the command line.
 
 mod bench;
+mod eval_localization;
 mod eval_terrain;
 mod output;
 
@@ -34,6 +35,8 @@ enum Command {
 enum EvalCommand {
     /// Terrain assessment: hazard recall, false hazards and elevation error on the default yard.
     Terrain(eval_terrain::EvalTerrainArgs),
+    /// Localisation: branch-and-bound exactness, match accuracy and closed-loop drift.
+    Localization(eval_localization::EvalLocalizationArgs),
 }
 
 /// Options of `rovernav run`.
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(cmd)) => bench::run(cmd),
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
+        Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
