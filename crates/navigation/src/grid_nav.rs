@@ -70,6 +70,8 @@ pub struct GridNavigator {
     blocked_senses: u32,
     backing_out: bool,
     last_command: LastCommand,
+    full_scan_at: Option<Point2>,
+    full_scan_pending: bool,
 }
 
 /// The kind of the last motion commanded, to locate a hazard contact.
@@ -101,6 +103,8 @@ impl GridNavigator {
             blocked_senses: 0,
             backing_out: false,
             last_command: LastCommand::Other,
+            full_scan_at: None,
+            full_scan_pending: false,
         }
     }
 
@@ -135,6 +139,13 @@ impl GridNavigator {
         let plan = match self.planner.plan(start, goal_cell) {
             Ok(plan) => plan,
             Err(PlanError::NoPath { .. }) => {
+                // Before giving up, look all around from here: close-range views replace the
+                // noisier far-range assessments that may have closed the way.
+                if self.full_scan_at.is_none_or(|p| p.dist(from) > 0.5) {
+                    self.full_scan_at = Some(from);
+                    self.full_scan_pending = true;
+                    return;
+                }
                 self.finish = Some((
                     Outcome::Unreachable,
                     "no path to the goal through known-safe and unknown terrain".into(),
@@ -308,6 +319,15 @@ impl Navigator for GridNavigator {
             let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
             let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
             return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
+        }
+        if self.full_scan_pending {
+            self.full_scan_pending = false;
+            self.last_command = LastCommand::Other;
+            let mut requests: Vec<SenseRequest> =
+                (0..8).map(|k| SenseRequest::Mast { pan: k as f64 * std::f64::consts::FRAC_PI_4 }).collect();
+            requests.extend([SenseRequest::BodyFront, SenseRequest::BodyRear]);
+            self.stats.sensing_actions += requests.len() as u64;
+            return NavCommand::Sense(requests);
         }
         let bearing = self.look_bearing.unwrap_or_else(|| goal.sub(here).angle());
         // When repeated looks in one direction reveal nothing drivable, widen the search.
