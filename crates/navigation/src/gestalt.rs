@@ -23,7 +23,7 @@
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
     DriveGuard, Goal, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay,
-    OverlayKind, Point2, Pose2, RoverConfig, SenseRequest, angle_diff, wrap_angle,
+    Point2, Pose2, RoverConfig, SenseRequest, angle_diff, wrap_angle,
 };
 use rovernav_planning::{Cell, CellChange, CostGrid, FieldDStar, GlobalPlanner};
 use std::collections::VecDeque;
@@ -625,12 +625,7 @@ impl Navigator for GestaltNavigator {
     }
 
     fn overlays(&self) -> Vec<Overlay> {
-        self.terrain
-            .as_ref()
-            .map(|t| {
-                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
-            })
-            .unwrap_or_default()
+        self.terrain.as_ref().map(TerrainModel::overlays).unwrap_or_default()
     }
 
     fn stats(&self) -> NavigatorStats {

@@ -10,8 +10,8 @@
 
 use crate::terrain_model::{CostMode, TerrainModel};
 use rovernav_core::{
-    DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
-    Point2, Pose2, RoverConfig, SenseRequest, angle_diff,
+    DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
+    Pose2, RoverConfig, SenseRequest, angle_diff,
 };
 use rovernav_planning::{Cell, GlobalPlanner, PlanError, SegmentDriverConfig, planner_by_name, segment_path};
 use std::collections::VecDeque;
@@ -343,12 +343,7 @@ impl Navigator for GridNavigator {
     }
 
     fn overlays(&self) -> Vec<Overlay> {
-        self.terrain
-            .as_ref()
-            .map(|t| {
-                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
-            })
-            .unwrap_or_default()
+        self.terrain.as_ref().map(TerrainModel::overlays).unwrap_or_default()
     }
 
     fn stats(&self) -> NavigatorStats {

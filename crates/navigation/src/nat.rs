@@ -17,8 +17,8 @@
 use crate::gestalt::{arc_pose, keep_out_distance};
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
-    DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
-    Point2, Pose2, RoverConfig, SenseRequest, angle_diff,
+    DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
+    Pose2, RoverConfig, SenseRequest, angle_diff,
 };
 use std::collections::HashMap;
 
@@ -274,12 +274,7 @@ impl Navigator for NatNavigator {
     }
 
     fn overlays(&self) -> Vec<Overlay> {
-        self.terrain
-            .as_ref()
-            .map(|t| {
-                t.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
-            })
-            .unwrap_or_default()
+        self.terrain.as_ref().map(TerrainModel::overlays).unwrap_or_default()
     }
 
     fn stats(&self) -> NavigatorStats {

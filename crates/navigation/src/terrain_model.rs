@@ -2,7 +2,9 @@
 //! into a world map, plus a world-aligned hazard layer grown into configuration space for
 //! planning (paper 000 section 2: obstacles grown by the rover size and a safety buffer).
 
-use rovernav_core::{Grid2, GridGeometry, Point2, PointCloud, PoseEstimate, RoverConfig};
+use rovernav_core::{
+    Grid2, GridGeometry, Overlay, OverlayKind, Point2, PointCloud, PoseEstimate, RoverConfig,
+};
 use rovernav_mapping::WorldMap;
 use rovernav_perception::{TerrainConfig, TerrainEvaluator};
 use rovernav_planning::{Cell, CostGrid};
@@ -206,6 +208,11 @@ impl TerrainModel {
             }
         }
         grid
+    }
+
+    /// The grown hazards as C-obstacle overlays for the traverse picture.
+    pub fn overlays(&self) -> Vec<Overlay> {
+        self.hazard_outlines().into_iter().map(|p| Overlay::Polygon(p, OverlayKind::CObstacle)).collect()
     }
 
     /// Outlines of the grown hazards, as convex C-obstacles, for display.
