@@ -135,22 +135,7 @@ pub fn point_in_polygon(p: Point2, polygon: &[Point2]) -> bool {
 
 /// Distance from `p` to the nearest keep-out polygon (0 inside one); infinity without any.
 pub fn keep_out_distance(goal: &Goal, p: Point2) -> f64 {
-    let mut best = f64::INFINITY;
-    for poly in &goal.keep_out {
-        if poly.len() < 3 {
-            continue;
-        }
-        if point_in_polygon(p, poly) {
-            return 0.0;
-        }
-        for i in 0..poly.len() {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            let ab = b.sub(a);
-            let t = (p.sub(a).dot(ab) / ab.dot(ab).max(1e-12)).clamp(0.0, 1.0);
-            best = best.min(p.dist(a.add(ab.scale(t))));
-        }
-    }
-    best
+    crate::terrain_model::distance_to_zones(&goal.keep_out, p)
 }
 
 /// The GESTALT navigator (see the module documentation).

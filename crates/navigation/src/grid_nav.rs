@@ -236,6 +236,7 @@ impl Navigator for GridNavigator {
         let goal = input.goal.position;
         if self.terrain.is_none() {
             self.init_map(here, goal);
+            self.terrain.as_mut().expect("map initialised").set_keep_out(&input.goal.keep_out);
         }
         if let Some((outcome, why)) = self.finish.clone() {
             return NavCommand::Finish(outcome, why);

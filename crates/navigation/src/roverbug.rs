@@ -514,6 +514,19 @@ impl RoverBug {
         for o in &self.obstacles[..fresh] {
             self.drawn_obstacles.push(o.vertices.clone());
         }
+        // Keep-out zones are C-obstacles like any sensed one (their convex hulls, grown by the
+        // same margin: conservative for a non-convex zone).
+        for zone in &input.goal.keep_out {
+            let hull = rovernav_perception::hull::convex_hull(zone);
+            if hull.len() >= 3 {
+                self.obstacles.push(CObstacle::from_hull(
+                    hull,
+                    self.terrain.growth(),
+                    self.terrain.max_arc_step,
+                    0,
+                ));
+            }
+        }
     }
 
     /// Motion-to-goal planning on the current view; false when a blocking obstacle stops it.

@@ -41,6 +41,8 @@ pub struct TerrainModel {
     assessed: Grid2<bool>,
     /// Hazards grown by the rover radius plus buffer (recomputed after each ingest).
     grown: Grid2<bool>,
+    /// Cells where the rover centre would enter a keep-out zone (grown like hazards).
+    keep_out: Grid2<bool>,
     growth: f64,
     config: TerrainConfig,
 }
@@ -59,8 +61,21 @@ impl TerrainModel {
             hazard: Grid2::filled(geometry, false),
             assessed: Grid2::filled(geometry, false),
             grown: Grid2::filled(geometry, false),
+            keep_out: Grid2::filled(geometry, false),
             growth: config.growth(),
             config,
+        }
+    }
+
+    /// Marks the mission's keep-out polygons, grown by the rover radius and buffer, as cells
+    /// the planner must never enter (paper 003's keep-out zones, honoured by every navigator).
+    pub fn set_keep_out(&mut self, zones: &[Vec<Point2>]) {
+        let g = self.keep_out.geometry;
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                let (x, y) = g.center(c, r);
+                *self.keep_out.get_mut(c, r) = distance_to_zones(zones, Point2::new(x, y)) <= self.growth;
+            }
         }
     }
 
@@ -196,6 +211,10 @@ impl TerrainModel {
                             || (goal_covered && p.dist(goal) <= escape_radius));
                     let _ = grid.set_cost(cell, if escapable { ESCAPE_COST } else { f32::INFINITY });
                 }
+                if *self.keep_out.get(c, r) {
+                    let _ = grid.set_cost(cell, f32::INFINITY);
+                    continue;
+                }
                 if mode == CostMode::Traversability && !*self.grown.get(c, r) && grid.is_blocked(cell) {
                     // MRPTA grades cells "not traversable" from roughness and neighbourhood
                     // too; only the step/slope hazards (grown) are walls, the rest is just
@@ -221,5 +240,45 @@ impl TerrainModel {
             .into_iter()
             .map(|o| o.vertices)
             .collect()
+    }
+}
+
+/// Distance from a point to the nearest of some polygons (0 inside one; infinity without any).
+pub fn distance_to_zones(zones: &[Vec<Point2>], p: Point2) -> f64 {
+    let mut best = f64::INFINITY;
+    for zone in zones.iter().filter(|z| z.len() >= 3) {
+        let mut inside = false;
+        for i in 0..zone.len() {
+            let (a, b) = (zone[i], zone[(i + 1) % zone.len()]);
+            if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+                inside = !inside;
+            }
+            let ab = b.sub(a);
+            let t = (p.sub(a).dot(ab) / ab.dot(ab).max(1e-12)).clamp(0.0, 1.0);
+            best = best.min(p.dist(a.add(ab.scale(t))));
+        }
+        if inside {
+            return 0.0;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zone_distance_is_zero_inside_and_euclidean_outside() {
+        let square = vec![vec![
+            Point2::new(0.0, 0.0),
+            Point2::new(2.0, 0.0),
+            Point2::new(2.0, 2.0),
+            Point2::new(0.0, 2.0),
+        ]];
+        assert_eq!(distance_to_zones(&square, Point2::new(1.0, 1.0)), 0.0);
+        assert!((distance_to_zones(&square, Point2::new(3.0, 1.0)) - 1.0).abs() < 1e-12);
+        assert!((distance_to_zones(&square, Point2::new(3.0, 3.0)) - 2f64.sqrt()).abs() < 1e-12);
+        assert_eq!(distance_to_zones(&[], Point2::new(0.0, 0.0)), f64::INFINITY);
     }
 }

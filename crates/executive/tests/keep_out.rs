@@ -1,0 +1,64 @@
+//! Keep-out zones from the mission are honoured by every registered navigator: the true rover
+//! never enters one, even when it lies across the straight line to the goal.
+
+use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
+use rovernav_executive::{RunSettings, World, run_world};
+use rovernav_navigation::NAVIGATOR_NAMES;
+use rovernav_sim::SensorModel;
+use rovernav_terrain::{Dem, Terrain};
+
+/// Even-odd test, written out here so the check is independent of the navigators' own.
+fn inside(p: Point2, zone: &[Point2]) -> bool {
+    let mut inside = false;
+    for i in 0..zone.len() {
+        let (a, b) = (zone[i], zone[(i + 1) % zone.len()]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+#[test]
+fn no_navigator_enters_a_keep_out_zone_across_its_way() {
+    let zone =
+        vec![Point2::new(8.0, 2.5), Point2::new(11.0, 2.5), Point2::new(11.0, 9.5), Point2::new(8.0, 9.5)];
+    for name in NAVIGATOR_NAMES {
+        let world = World {
+            terrain: Terrain { dem: Dem::flat(200, 120, 0.1, 0.0), rocks: vec![] },
+            rover: RoverConfig::default(),
+            sensor_model: SensorModel::default(),
+            start: Pose2::new(3.0, 6.0, 0.0),
+            goal: Goal {
+                position: Point2::new(16.0, 6.0),
+                tolerance: 0.5,
+                waypoints: vec![],
+                keep_out: vec![zone.clone()],
+            },
+        };
+        let settings = RunSettings {
+            navigator: name.into(),
+            localizer: "dead-reckoning".into(),
+            seed: 3,
+            time_limit_s: 3600.0,
+            max_cycles: 300,
+            name: "keep-out".into(),
+        };
+        let out =
+            run_world(world, &settings, "keep-out scenario", &mut |_| {}).expect("registered navigator");
+        for pose in &out.trace.truth {
+            assert!(
+                !inside(Point2::new(pose.x, pose.y), &zone),
+                "{name} entered the keep-out zone at ({:.2}, {:.2}); run: {} ({})",
+                pose.x,
+                pose.y,
+                out.report.outcome,
+                out.report.message
+            );
+        }
+        eprintln!(
+            "{name}: {} after {:.1} m ({})",
+            out.report.outcome, out.report.distance_driven_m, out.report.message
+        );
+    }
+}
