@@ -15,4 +15,4 @@ pub mod world;
 pub use mission::{Mission, MissionError};
 pub use report::Report;
 pub use run::{Progress, RunError, RunOutput, RunSettings, Trace, run_mission, run_world};
-pub use world::{World, WorldError, build_world};
+pub use world::{World, WorldError, build_world, long_yard_world};

@@ -48,8 +48,6 @@ pub struct Trace {
     pub plans: Vec<Vec<Point2>>,
     /// The navigator's overlays at the end of the run.
     pub overlays: Vec<Overlay>,
-    /// Where the true rover met a hazard.
-    pub hazards: Vec<Point2>,
     /// Cells covered by range data (placed with the true pose: this is for display only).
     pub sensed: Option<Grid2<bool>>,
 }
@@ -193,7 +191,6 @@ pub fn run_world(
         }
         if sim.hazard_contacts() > last_hazards {
             last_hazards = sim.hazard_contacts();
-            trace.hazards.push(Point2::new(truth.x, truth.y));
             hazard_events.push(HazardEvent {
                 x: truth.x,
                 y: truth.y,

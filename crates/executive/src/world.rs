@@ -232,6 +232,29 @@ fn goal_xy(g: &GoalSpec) -> SpecXy {
     }
 }
 
+/// A long procedural yard for traverse tests: `length` m from a start `end_margin` m inside its
+/// west end to a goal `end_margin` m inside its east end, `height` m wide, rock abundance 0.1.
+pub fn long_yard_world(seed: u64, length: f64, height: f64, end_margin: f64) -> World {
+    let start = Point2::new(end_margin, height / 2.0);
+    let goal = Point2::new(end_margin + length, height / 2.0);
+    let params = MarsYardParams {
+        width_m: length + 2.0 * end_margin,
+        height_m: height,
+        resolution: 0.05,
+        seed,
+        rocks: RockFieldParams { abundance: 0.1, ..Default::default() },
+        clear_pads: vec![pad(start), pad(goal)],
+        ..Default::default()
+    };
+    World {
+        terrain: rovernav_terrain::generate(&params),
+        rover: RoverConfig::default(),
+        sensor_model: SensorModel::default(),
+        start: Pose2::new(start.x, start.y, 0.0),
+        goal: Goal { position: goal, tolerance: 1.0, waypoints: vec![], keep_out: vec![] },
+    }
+}
+
 /// Cell size of the ground-truth hazard grid used for the optimal path (m).
 const OPTIMAL_PATH_RESOLUTION: f64 = 0.1;
 

@@ -8,33 +8,11 @@
 //! make the final estimate worse than dead reckoning by more than a stated bound, and that the
 //! rejected matches are counted rather than used.
 
-use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
 use rovernav_executive::{RunSettings, World, run_world};
-use rovernav_sim::SensorModel;
-use rovernav_terrain::procedural::{ClearPad, generate};
-use rovernav_terrain::{MarsYardParams, RockFieldParams};
 
 /// A procedural yard `length + 10` m long with the goal `length` m east of the start.
 fn yard(seed: u64, length: f64) -> World {
-    let height = 16.0;
-    let start = Point2::new(5.0, height / 2.0);
-    let goal = Point2::new(5.0 + length, height / 2.0);
-    let params = MarsYardParams {
-        width_m: length + 10.0,
-        height_m: height,
-        resolution: 0.05,
-        seed,
-        rocks: RockFieldParams { abundance: 0.1, ..Default::default() },
-        clear_pads: [start, goal].iter().map(|p| ClearPad { x: p.x, y: p.y, radius: 1.0 }).collect(),
-        ..Default::default()
-    };
-    World {
-        terrain: generate(&params),
-        rover: RoverConfig::default(),
-        sensor_model: SensorModel::default(),
-        start: Pose2::new(start.x, start.y, 0.0),
-        goal: Goal { position: goal, tolerance: 1.0, waypoints: vec![], keep_out: vec![] },
-    }
+    rovernav_executive::long_yard_world(seed, length, 16.0, 5.0)
 }
 
 fn final_error(world: World, localizer: &str, seed: u64) -> (f64, f64) {

@@ -8,7 +8,7 @@
 
 use crate::incremental::{Engine, Model};
 use crate::lattice::Lattice;
-use crate::{Cell, CellChange, CostGrid, GlobalPlanner, GraphKind, Plan, PlanError};
+use crate::{CostGrid, GraphKind};
 use rovernav_core::Point2;
 
 /// Graph model: rhs(s) = min over neighbours s' of c(s, s') + g(s').
@@ -90,29 +90,4 @@ impl DStarLite {
     }
 }
 
-impl GlobalPlanner for DStarLite {
-    fn name(&self) -> &'static str {
-        CentreGraph::NAME
-    }
-    fn graph(&self) -> GraphKind {
-        CentreGraph::GRAPH
-    }
-    fn set_grid(&mut self, grid: CostGrid) {
-        self.engine.set_grid(grid);
-    }
-    fn grid(&self) -> Option<&CostGrid> {
-        self.engine.grid()
-    }
-    fn plan(&mut self, start: Cell, goal: Cell) -> Result<Plan, PlanError> {
-        self.engine.plan(start, goal)
-    }
-    fn update_cells(&mut self, changes: &[CellChange]) -> Result<(), PlanError> {
-        self.engine.update_cells(changes)
-    }
-    fn move_start(&mut self, start: Cell) -> Result<(), PlanError> {
-        self.engine.move_start(start)
-    }
-    fn replan(&mut self) -> Result<Plan, PlanError> {
-        self.engine.replan()
-    }
-}
+crate::incremental::impl_global_planner!(DStarLite, CentreGraph);

@@ -35,7 +35,7 @@
 
 use crate::incremental::{Engine, Model};
 use crate::lattice::Lattice;
-use crate::{Cell, CellChange, CostGrid, GlobalPlanner, GraphKind, Plan, PlanError};
+use crate::{Cell, CostGrid, GraphKind};
 use rovernav_core::Point2;
 use std::f64::consts::SQRT_2;
 
@@ -303,36 +303,12 @@ impl FieldDStar {
     }
 }
 
-impl GlobalPlanner for FieldDStar {
-    fn name(&self) -> &'static str {
-        Interpolated::NAME
-    }
-    fn graph(&self) -> GraphKind {
-        Interpolated::GRAPH
-    }
-    fn set_grid(&mut self, grid: CostGrid) {
-        self.engine.set_grid(grid);
-    }
-    fn grid(&self) -> Option<&CostGrid> {
-        self.engine.grid()
-    }
-    fn plan(&mut self, start: Cell, goal: Cell) -> Result<Plan, PlanError> {
-        self.engine.plan(start, goal)
-    }
-    fn update_cells(&mut self, changes: &[CellChange]) -> Result<(), PlanError> {
-        self.engine.update_cells(changes)
-    }
-    fn move_start(&mut self, start: Cell) -> Result<(), PlanError> {
-        self.engine.move_start(start)
-    }
-    fn replan(&mut self) -> Result<Plan, PlanError> {
-        self.engine.replan()
-    }
-}
+crate::incremental::impl_global_planner!(FieldDStar, Interpolated);
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::GlobalPlanner;
 
     #[test]
     fn triangle_cost_matches_brute_force_minimum() {

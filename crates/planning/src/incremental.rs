@@ -339,3 +339,41 @@ impl<M: Model> Engine<M> {
         Ok(Plan { cost, value, points, expansions: self.expansions })
     }
 }
+
+/// Implements `GlobalPlanner` for a planner struct whose `engine` field is an `Engine<M>`: the
+/// incremental planners differ only in their model, so the trait is pure delegation.
+macro_rules! impl_global_planner {
+    ($planner:ty, $model:ty) => {
+        impl $crate::GlobalPlanner for $planner {
+            fn name(&self) -> &'static str {
+                <$model as $crate::incremental::Model>::NAME
+            }
+            fn graph(&self) -> $crate::GraphKind {
+                <$model as $crate::incremental::Model>::GRAPH
+            }
+            fn set_grid(&mut self, grid: $crate::CostGrid) {
+                self.engine.set_grid(grid);
+            }
+            fn grid(&self) -> Option<&$crate::CostGrid> {
+                self.engine.grid()
+            }
+            fn plan(
+                &mut self,
+                start: $crate::Cell,
+                goal: $crate::Cell,
+            ) -> Result<$crate::Plan, $crate::PlanError> {
+                self.engine.plan(start, goal)
+            }
+            fn update_cells(&mut self, changes: &[$crate::CellChange]) -> Result<(), $crate::PlanError> {
+                self.engine.update_cells(changes)
+            }
+            fn move_start(&mut self, start: $crate::Cell) -> Result<(), $crate::PlanError> {
+                self.engine.move_start(start)
+            }
+            fn replan(&mut self) -> Result<$crate::Plan, $crate::PlanError> {
+                self.engine.replan()
+            }
+        }
+    };
+}
+pub(crate) use impl_global_planner;

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use anyhow::Context;
-use rovernav_core::{Goal, Localizer, NavCommand, NavInput, Point2, Pose2, Pose3, RoverConfig, SenseRequest};
+use rovernav_core::{Localizer, NavCommand, NavInput, Pose2, Pose3, RoverConfig, SenseRequest};
 use rovernav_executive::World;
 use rovernav_localization::evaluation::{BnbSetup, SequenceSetup, bnb_efficiency, sequence_accuracy};
 use rovernav_localization::{DeadReckoning, EkfMl};
@@ -77,25 +77,7 @@ pub struct LoopResult {
 
 /// A long procedural yard with a start at its west end and a goal `length` metres east.
 pub fn closed_loop_world(seed: u64, length: f64) -> World {
-    let height = 40.0;
-    let start = Point2::new(10.0, height / 2.0);
-    let goal = Point2::new(10.0 + length, height / 2.0);
-    let params = MarsYardParams {
-        width_m: length + 20.0,
-        height_m: height,
-        resolution: 0.05,
-        seed,
-        rocks: RockFieldParams { abundance: 0.1, ..Default::default() },
-        clear_pads: [start, goal].iter().map(|p| ClearPad { x: p.x, y: p.y, radius: 1.0 }).collect(),
-        ..Default::default()
-    };
-    World {
-        terrain: generate(&params),
-        rover: RoverConfig::default(),
-        sensor_model: SensorModel::default(),
-        start: Pose2::new(start.x, start.y, 0.0),
-        goal: Goal { position: goal, tolerance: 1.0, waypoints: vec![], keep_out: vec![] },
-    }
+    rovernav_executive::long_yard_world(seed, length, 40.0, 10.0)
 }
 
 /// Drives a world with a navigator and a localiser through the simulator; returns the result

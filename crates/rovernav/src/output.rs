@@ -32,6 +32,7 @@ pub fn write_run_outputs(dir: &Path, output: &RunOutput) -> anyhow::Result<()> {
     let world = &output.world;
     let trace = &output.trace;
     let keep_out: Vec<Vec<Point2>> = world.goal.keep_out.clone();
+    let hazards: Vec<Point2> = output.report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
     let scene = TraverseScene {
         terrain: &world.terrain,
         hazard_height: world.rover.clearance,
@@ -40,7 +41,7 @@ pub fn write_run_outputs(dir: &Path, output: &RunOutput) -> anyhow::Result<()> {
         overlays: &trace.overlays,
         driven: &trace.truth,
         estimated: &trace.estimate,
-        hazards: &trace.hazards,
+        hazards: &hazards,
         start: world.start.position(),
         goal: world.goal.position,
         keep_out: &keep_out,

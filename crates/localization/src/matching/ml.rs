@@ -189,25 +189,10 @@ impl MlMatcher {
         window: &SearchWindow,
         exhaustive: bool,
     ) -> Result<MatchDetails, MatchError> {
-        window.validate()?;
         let r = local.resolution();
         if !(r > 0.0 && r.is_finite()) {
             return Err(MatchError::BadResolution { map: "local", value: r });
         }
-        let filtered = match self.params.high_pass_window {
-            Some(w) => high_pass(local, w),
-            None => local.clone(),
-        };
-        let cells = LocalCells::new(&filtered, &self.voxels, self.params.max_local_cells)?;
-        let mut scorer = Scorer::new(
-            &self.voxels,
-            &cells,
-            &self.likelihood,
-            window,
-            self.params.bound,
-            self.params.split,
-            self.neutral_distance(),
-        );
         let analysis = PeakAnalysis {
             temperature: self.params.temperature,
             failure_margin: self.params.failure_margin,
@@ -215,7 +200,7 @@ impl MlMatcher {
             fit_radius: 2,
             max_competitors: 4,
         };
-        Ok(run_match(&mut scorer, &analysis, exhaustive))
+        self.with_scorer(local, window, |scorer| run_match(scorer, &analysis, exhaustive))
     }
 
     /// Runs only the search (no peak fit, no failure search): the best lattice pose by branch
@@ -226,6 +211,23 @@ impl MlMatcher {
         window: &SearchWindow,
         exhaustive: bool,
     ) -> Result<(SearchOutcome, PoseLattice), MatchError> {
+        self.with_scorer(local, window, |scorer| {
+            let outcome = if exhaustive {
+                scorer.exhaustive()
+            } else {
+                scorer.branch_and_bound(f64::NEG_INFINITY, Some([0, 0, 0]), &[])
+            };
+            (outcome, scorer.lattice())
+        })
+    }
+
+    /// Validates the window, filters and samples the local map, and hands a scorer over it to `f`.
+    fn with_scorer<R>(
+        &self,
+        local: &Grid2<f32>,
+        window: &SearchWindow,
+        f: impl FnOnce(&mut Scorer<'_, MixtureLikelihood>) -> R,
+    ) -> Result<R, MatchError> {
         window.validate()?;
         let filtered = match self.params.high_pass_window {
             Some(w) => high_pass(local, w),
@@ -241,12 +243,7 @@ impl MlMatcher {
             self.params.split,
             self.neutral_distance(),
         );
-        let outcome = if exhaustive {
-            scorer.exhaustive()
-        } else {
-            scorer.branch_and_bound(f64::NEG_INFINITY, Some([0, 0, 0]), &[])
-        };
-        Ok((outcome, scorer.lattice()))
+        Ok(f(&mut scorer))
     }
 
     /// Log-likelihood of a local map at a continuous pose (nearest-voxel lookup), for
