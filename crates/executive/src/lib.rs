@@ -13,6 +13,9 @@ pub mod run;
 pub mod world;
 
 pub use mission::{Mission, MissionError};
-pub use report::Report;
-pub use run::{Progress, RunError, RunOutput, RunSettings, Trace, run_mission, run_world};
+pub use report::{HazardEvent, Report, StageTimes};
+pub use run::{
+    CycleRecord, NoObserver, Progress, RunError, RunObserver, RunOutput, RunSettings, Trace, run_mission,
+    run_mission_observed, run_world, run_world_observed,
+};
 pub use world::{World, WorldError, build_world, long_yard_world};

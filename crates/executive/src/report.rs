@@ -39,6 +39,20 @@ pub struct Report {
     pub straight_line_m: f64,
     /// Where and why the true rover met a hazard.
     pub hazard_events: Vec<HazardEvent>,
+    /// Wall-clock compute per navigator cycle, by stage.
+    #[serde(default)]
+    pub compute_per_cycle: StageTimes,
+}
+
+/// Mean wall-clock seconds per cycle spent in each stage of the loop.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct StageTimes {
+    /// The navigator's step: perception, mapping and planning (s per cycle).
+    pub navigation_s: f64,
+    /// The localiser's update (s per cycle).
+    pub localization_s: f64,
+    /// The platform (simulator) executing the command and sensing (s per cycle).
+    pub platform_s: f64,
 }
 
 /// One hazard contact of the true rover.

@@ -1,10 +1,11 @@
 //! The navigation loop: navigator <-> platform, with the localiser in between.
 
 use crate::mission::Mission;
-use crate::report::{HazardEvent, Report};
+use crate::report::{HazardEvent, Report, StageTimes};
 use crate::world::{World, WorldError, build_world};
 use rovernav_core::{
-    Goal, Grid2, GridGeometry, NavCommand, NavInput, Navigator, Outcome, Overlay, Point2, Pose3, SensorFrame,
+    Goal, Grid2, GridGeometry, NavCommand, NavInput, Navigator, Outcome, Overlay, Point2, Pose3,
+    PoseEstimate, SensorFrame,
 };
 use rovernav_sim::Simulator;
 use std::time::Instant;
@@ -75,6 +76,49 @@ pub struct Progress {
     pub distance_to_goal_m: f64,
 }
 
+/// One navigator cycle as the loop saw it, for telemetry and other observers.
+#[derive(Clone, Copy, Debug)]
+pub struct CycleRecord<'a> {
+    /// Cycle number (1 for the first command).
+    pub cycle: u64,
+    /// Simulated time after the command (s).
+    pub sim_time_s: f64,
+    /// The command the navigator issued.
+    pub command: &'a NavCommand,
+    /// What the platform reported after executing it.
+    pub frame: &'a SensorFrame,
+    /// The localiser's estimate after the frame.
+    pub estimate: &'a PoseEstimate,
+    /// Simulator truth after the command (scoring and logs only; never shown to the autonomy).
+    pub truth: &'a Pose3,
+    /// The navigator's current plan (world frame).
+    pub plan: &'a [Point2],
+    /// Hazard contacts so far.
+    pub hazard_contacts: u32,
+}
+
+/// Watches a run from outside the loop (telemetry logs, live displays); never steers it.
+pub trait RunObserver {
+    /// Called once before the first command with the world, the settings and the first frame.
+    fn on_start(
+        &mut self,
+        _world: &World,
+        _settings: &RunSettings,
+        _frame: &SensorFrame,
+        _estimate: &PoseEstimate,
+    ) {
+    }
+    /// Called after every executed command.
+    fn on_cycle(&mut self, _record: &CycleRecord<'_>) {}
+    /// Called once with the final report and trace.
+    fn on_finish(&mut self, _report: &Report, _trace: &Trace) {}
+}
+
+/// An observer that does nothing.
+pub struct NoObserver;
+
+impl RunObserver for NoObserver {}
+
 /// The run settings a mission gives besides its world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunSettings {
@@ -123,6 +167,28 @@ pub fn run_world(
     origin: &str,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<RunOutput, RunError> {
+    run_world_observed(world, mission, origin, on_progress, &mut NoObserver)
+}
+
+/// Runs a mission with an observer watching every cycle.
+pub fn run_mission_observed(
+    mission: &Mission,
+    origin: &str,
+    on_progress: &mut dyn FnMut(&Progress),
+    observer: &mut dyn RunObserver,
+) -> Result<RunOutput, RunError> {
+    let world = build_world(mission, origin)?;
+    run_world_observed(world, &RunSettings::of(mission), origin, on_progress, observer)
+}
+
+/// [`run_world`] with an observer watching every cycle.
+pub fn run_world_observed(
+    world: World,
+    mission: &RunSettings,
+    origin: &str,
+    on_progress: &mut dyn FnMut(&Progress),
+    observer: &mut dyn RunObserver,
+) -> Result<RunOutput, RunError> {
     let wall = Instant::now();
     let mut navigator: Box<dyn Navigator> =
         rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
@@ -163,7 +229,9 @@ pub fn run_world(
     localizer.update(&frame);
     trace.truth.push(sim.truth());
     trace.estimate.push(localizer.estimate().pose);
+    observer.on_start(&world, mission, &frame, &localizer.estimate());
     let mut cycles = 0u64;
+    let mut spent = StageTimes::default();
     let mut last_hazards = 0;
     let mut hazard_events = Vec::new();
     let (outcome, message) = loop {
@@ -174,16 +242,22 @@ pub fn run_world(
             break (Outcome::Timeout, format!("cycle limit of {} reached", mission.max_cycles));
         }
         let input = NavInput { time: sim.time(), estimate: localizer.estimate(), goal: &goal, frame: &frame };
+        let started = Instant::now();
         let command = navigator.step(&input);
+        spent.navigation_s += started.elapsed().as_secs_f64();
         let plan = navigator.planned_path();
         if !plan.is_empty() && trace.plans.last() != Some(&plan) {
-            trace.plans.push(plan);
+            trace.plans.push(plan.clone());
         }
         if let NavCommand::Finish(outcome, message) = command {
             break (outcome, message);
         }
+        let started = Instant::now();
         frame = sim.execute(&command);
+        spent.platform_s += started.elapsed().as_secs_f64();
+        let started = Instant::now();
         localizer.update(&frame);
+        spent.localization_s += started.elapsed().as_secs_f64();
         cycles += 1;
         let truth = sim.truth();
         for cloud in &frame.clouds {
@@ -199,7 +273,18 @@ pub fn run_world(
             });
         }
         trace.truth.push(truth);
-        trace.estimate.push(localizer.estimate().pose);
+        let estimate = localizer.estimate();
+        trace.estimate.push(estimate.pose);
+        observer.on_cycle(&CycleRecord {
+            cycle: cycles,
+            sim_time_s: sim.time(),
+            command: &command,
+            frame: &frame,
+            estimate: &estimate,
+            truth: &truth,
+            plan: &plan,
+            hazard_contacts: sim.hazard_contacts(),
+        });
         let truth_pos = Point2::new(truth.x, truth.y);
         on_progress(&Progress {
             cycles,
@@ -231,8 +316,20 @@ pub fn run_world(
         mission: mission.name.clone(),
         straight_line_m: world.start.position().dist(goal.position),
         hazard_events,
+        compute_per_cycle: per_cycle(spent, cycles),
     };
+    observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
+}
+
+/// Totals divided by the cycle count (zero when no command ran).
+fn per_cycle(total: StageTimes, cycles: u64) -> StageTimes {
+    let n = cycles.max(1) as f64;
+    StageTimes {
+        navigation_s: total.navigation_s / n,
+        localization_s: total.localization_s / n,
+        platform_s: total.platform_s / n,
+    }
 }
 
 /// Marks the cells a cloud's points fall in (display only, so true placement is fine).
