@@ -7,11 +7,13 @@
 //! autonomy only ever sees `SensorFrame`s; ground truth stays inside the simulator and is used
 //! here solely to score the run.
 
+pub mod command_language;
 pub mod mission;
 pub mod report;
 pub mod run;
 pub mod world;
 
+pub use command_language::OperatorCommand;
 pub use mission::{Mission, MissionError};
 pub use report::{HazardEvent, Report, StageTimes};
 pub use run::{
