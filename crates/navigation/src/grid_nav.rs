@@ -72,7 +72,12 @@ pub struct GridNavigator {
     last_command: LastCommand,
     full_scan_at: Option<Point2>,
     full_scan_pending: bool,
+    /// Where the safety buffer was dropped to pass a tight spot (restored 3 m away).
+    squeezed_at: Option<Point2>,
 }
+
+/// Distance from the squeeze point after which the safety buffer is restored (m).
+const SQUEEZE_RELEASE_M: f64 = 3.0;
 
 /// The kind of the last motion commanded, to locate a hazard contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,6 +110,7 @@ impl GridNavigator {
             last_command: LastCommand::Other,
             full_scan_at: None,
             full_scan_pending: false,
+            squeezed_at: None,
         }
     }
 
@@ -144,6 +150,15 @@ impl GridNavigator {
                 if self.full_scan_at.is_none_or(|p| p.dist(from) > 0.5) {
                     self.full_scan_at = Some(from);
                     self.full_scan_pending = true;
+                    return;
+                }
+                // Then squeeze: the safety buffer is margin for sensing error, not the rover's
+                // size, so a way that only the buffer closes is taken with the bare rover
+                // radius, and the buffer comes back once the rover is clear of the tight spot.
+                if self.squeezed_at.is_none() && self.config.safety_buffer > 0.0 {
+                    self.squeezed_at = Some(from);
+                    self.terrain.as_mut().expect("map initialised").set_safety_buffer(0.0);
+                    self.replan(from, goal);
                     return;
                 }
                 self.finish = Some((
@@ -280,6 +295,13 @@ impl Navigator for GridNavigator {
             }
         }
         self.backing_out = false;
+        if let Some(p) = self.squeezed_at
+            && p.dist(here) > SQUEEZE_RELEASE_M
+        {
+            self.squeezed_at = None;
+            let buffer = self.config.safety_buffer;
+            self.terrain.as_mut().expect("map initialised").set_safety_buffer(buffer);
+        }
         if !input.frame.clouds.is_empty() {
             self.terrain.as_mut().expect("map initialised").ingest(&input.frame.clouds, &input.estimate);
             self.replan(here, goal);

@@ -155,6 +155,17 @@ impl TerrainModel {
         }
     }
 
+    /// Growth of hazards into configuration space (rover radius plus safety buffer, m).
+    pub fn growth(&self) -> f64 {
+        self.growth
+    }
+
+    /// Regrows the hazards with another safety buffer (the rover radius always stays).
+    pub fn set_safety_buffer(&mut self, buffer: f64) {
+        self.growth = self.config.rover_radius + buffer.max(0.0);
+        self.grow_hazards();
+    }
+
     /// Records an obstacle the body met but perception missed (a hazard contact), so the
     /// planner never drives into it again.
     pub fn mark_contact(&mut self, p: Point2) {
