@@ -43,6 +43,13 @@ pub struct Mission {
     pub start: PoseSpec,
     /// Goal.
     pub goal: GoalSpec,
+    /// Tasks after reaching the goal (`[[tasks]]`), in order; the plan always first drives to
+    /// each waypoint and then the goal.
+    #[serde(default)]
+    pub tasks: Vec<TaskSpecToml>,
+    /// Faults the simulator injects (`[[faults]]`), for fault-protection tests and drills.
+    #[serde(default)]
+    pub faults: Vec<FaultSpec>,
     /// Folder the mission file was read from (relative DEM paths resolve against it first).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -197,6 +204,91 @@ fn default_tolerance() -> f64 {
     0.5
 }
 
+/// The kinds of `[[tasks]]` entry.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum TaskKindName {
+    /// Drive to `x`, `y`.
+    DriveTo,
+    /// Image all around with the mast.
+    Panorama,
+    /// Image the target `x`, `y` with the mast.
+    ScienceImage,
+    /// Place an instrument on the target `x`, `y` (in the arm's reach).
+    PlaceInstrument,
+    /// Scoop a sample at the target `x`, `y` (in the arm's reach).
+    Scoop,
+}
+
+/// One `[[tasks]]` entry.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpecToml {
+    /// What to do.
+    pub kind: TaskKindName,
+    /// Target east (m), in the goal's frame; every kind but `panorama` needs one.
+    pub x: Option<f64>,
+    /// Target north (m), in the goal's frame.
+    pub y: Option<f64>,
+    /// Arrival tolerance of a `drive_to` (m; default: the goal's).
+    pub tolerance_m: Option<f64>,
+    /// Start together with the previous task (they must need different resources).
+    #[serde(default)]
+    pub parallel: bool,
+}
+
+/// The kinds of `[[faults]]` entry.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FaultKindName {
+    /// A range sensor returns images without points (`sensor` names it).
+    SilentSensor,
+    /// The wheels of one side stop turning (`side` names it).
+    StalledWheel,
+    /// The compass reads NaN.
+    CompassNan,
+}
+
+/// Range sensors a fault can silence.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SensorName {
+    /// Mast stereo pair.
+    Mast,
+    /// Forward body stereo pair.
+    BodyFront,
+    /// Rear body stereo pair.
+    BodyRear,
+    /// Nodding LIDAR.
+    Lidar,
+}
+
+/// A side of the rover.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// Left.
+    Left,
+    /// Right.
+    Right,
+}
+
+/// One `[[faults]]` entry: what fails and when (default: from the start).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSpec {
+    /// What fails.
+    pub kind: FaultKindName,
+    /// For `silent_sensor`: which sensor.
+    pub sensor: Option<SensorName>,
+    /// For `stalled_wheel`: which side.
+    pub side: Option<Side>,
+    /// Fail before this command (commands count from 1; 0 is before the first frame).
+    pub at_cycle: Option<u64>,
+    /// Fail at the first action starting at or after this simulated time (s).
+    pub at_time_s: Option<f64>,
+}
+
 /// A mission that could not be read or does not make sense.
 #[derive(Debug, thiserror::Error)]
 pub enum MissionError {
@@ -331,7 +423,124 @@ impl Mission {
                 return bad(&format!("goal.keep_out[{i}]"), "a polygon needs at least 3 vertices");
             }
         }
+        for (i, t) in self.tasks.iter().enumerate() {
+            let field = |name: &str| format!("tasks[{i}].{name}");
+            let has_target = t.x.is_some() || t.y.is_some();
+            if t.kind == TaskKindName::Panorama && has_target {
+                return bad(&field("x"), "a panorama takes no target");
+            }
+            if t.kind != TaskKindName::Panorama && !(t.x.is_some() && t.y.is_some()) {
+                return bad(
+                    &field(if t.x.is_none() { "x" } else { "y" }),
+                    "this task needs a target x and y",
+                );
+            }
+            if [t.x, t.y].iter().flatten().any(|v| !v.is_finite()) {
+                return bad(&field("x"), "target coordinates must be finite numbers");
+            }
+            if let Some(tol) = t.tolerance_m {
+                if t.kind != TaskKindName::DriveTo {
+                    return bad(&field("tolerance_m"), "only a drive_to has an arrival tolerance");
+                }
+                if !positive(tol) {
+                    return bad(&field("tolerance_m"), "must be positive");
+                }
+            }
+        }
+        // Resource conflicts of parallel tasks; the plan's drives come before these tasks.
+        let mut plan = vec![crate::deliberative::TaskSpec {
+            kind: crate::deliberative::TaskKind::DriveTo {
+                target: rovernav_core::Point2::new(0.0, 0.0),
+                tolerance: 1.0,
+            },
+            parallel: false,
+        }];
+        plan.extend(self.plan_tasks(&|x, y| rovernav_core::Point2::new(x, y)));
+        if let Err((i, why)) = crate::deliberative::validate_plan(&plan) {
+            return bad(&format!("tasks[{}].parallel", i - 1), &why);
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            let field = |name: &str| format!("faults[{i}].{name}");
+            match (f.kind, f.sensor, f.side) {
+                (FaultKindName::SilentSensor, None, _) => {
+                    return bad(
+                        &field("sensor"),
+                        "silent_sensor needs `sensor` (mast, body_front, body_rear, lidar)",
+                    );
+                }
+                (FaultKindName::StalledWheel, _, None) => {
+                    return bad(&field("side"), "stalled_wheel needs `side` (left or right)");
+                }
+                (k, Some(_), _) if k != FaultKindName::SilentSensor => {
+                    return bad(&field("sensor"), "only silent_sensor names a sensor");
+                }
+                (k, _, Some(_)) if k != FaultKindName::StalledWheel => {
+                    return bad(&field("side"), "only stalled_wheel names a side");
+                }
+                _ => {}
+            }
+            if f.at_cycle.is_some() && f.at_time_s.is_some() {
+                return bad(&field("at_time_s"), "give at_cycle or at_time_s, not both");
+            }
+            if f.at_time_s.is_some_and(|t| !(t.is_finite() && t >= 0.0)) {
+                return bad(&field("at_time_s"), "must be a non-negative number of seconds");
+            }
+        }
         Ok(())
+    }
+
+    /// The `[[tasks]]` as plan entries, with targets mapped by `to_local` (goal frame to local).
+    pub fn plan_tasks(
+        &self,
+        to_local: &dyn Fn(f64, f64) -> rovernav_core::Point2,
+    ) -> Vec<crate::deliberative::TaskSpec> {
+        use crate::deliberative::{TaskKind, TaskSpec};
+        self.tasks
+            .iter()
+            .map(|t| {
+                let target = to_local(t.x.unwrap_or(f64::NAN), t.y.unwrap_or(f64::NAN));
+                let kind = match t.kind {
+                    TaskKindName::DriveTo => TaskKind::DriveTo {
+                        target,
+                        tolerance: t.tolerance_m.unwrap_or(self.goal.tolerance_m),
+                    },
+                    TaskKindName::Panorama => TaskKind::Panorama,
+                    TaskKindName::ScienceImage => TaskKind::ScienceImage { target },
+                    TaskKindName::PlaceInstrument => TaskKind::PlaceInstrument { target },
+                    TaskKindName::Scoop => TaskKind::Scoop { target },
+                };
+                TaskSpec { kind, parallel: t.parallel }
+            })
+            .collect()
+    }
+
+    /// The `[[faults]]` as the platform's schedule.
+    pub fn fault_schedule(&self) -> Vec<crate::platform::ScheduledFault> {
+        use crate::platform::{FaultTrigger, ScheduledFault};
+        use rovernav_core::CameraKind;
+        use rovernav_sim::Fault;
+        self.faults
+            .iter()
+            .map(|f| {
+                let fault = match (f.kind, f.sensor, f.side) {
+                    (FaultKindName::SilentSensor, sensor, _) => Fault::SilentSensor(match sensor {
+                        Some(SensorName::BodyFront) => CameraKind::BodyFront,
+                        Some(SensorName::BodyRear) => CameraKind::BodyRear,
+                        Some(SensorName::Lidar) => CameraKind::Lidar,
+                        Some(SensorName::Mast) | None => CameraKind::Mast,
+                    }),
+                    (FaultKindName::StalledWheel, _, side) => {
+                        Fault::StalledWheel { left: side != Some(Side::Right) }
+                    }
+                    (FaultKindName::CompassNan, _, _) => Fault::CompassNaN,
+                };
+                let at = match (f.at_cycle, f.at_time_s) {
+                    (_, Some(t)) => FaultTrigger::Time(t),
+                    (c, None) => FaultTrigger::Cycle(c.unwrap_or(0)),
+                };
+                ScheduledFault { fault, at }
+            })
+            .collect()
     }
 }
 
@@ -358,6 +567,47 @@ mod tests {
         let text = DEFAULT_MISSION_TOML.replace("rock_abundance = 0.16", "rock_abundance = 3.0");
         let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
         assert!(err.contains("terrain.rock_abundance"), "{err}");
+    }
+
+    #[test]
+    fn tasks_and_faults_are_read_and_checked() {
+        let text = format!(
+            "{DEFAULT_MISSION_TOML}\n[[tasks]]\nkind = \"panorama\"\n[[tasks]]\nkind = \"scoop\"\nx = 20.5\ny = 20.0\nparallel = true\n\
+             [[faults]]\nkind = \"stalled_wheel\"\nside = \"right\"\nat_cycle = 4\n"
+        );
+        let m = Mission::from_toml(&text, "m.toml").unwrap();
+        assert_eq!(m.tasks.len(), 2);
+        let plan = m.plan_tasks(&|x, y| rovernav_core::Point2::new(x, y));
+        assert_eq!(
+            plan[1].kind,
+            crate::deliberative::TaskKind::Scoop { target: rovernav_core::Point2::new(20.5, 20.0) }
+        );
+        assert!(plan[1].parallel);
+        let schedule = m.fault_schedule();
+        assert_eq!(schedule[0].fault, rovernav_sim::Fault::StalledWheel { left: false });
+        assert_eq!(schedule[0].at, crate::platform::FaultTrigger::Cycle(4));
+        for (bad, field) in [
+            ("[[tasks]]\nkind = \"scoop\"\nx = 1.0\n", "tasks[0].y"),
+            ("[[tasks]]\nkind = \"panorama\"\nx = 1.0\n", "tasks[0].x"),
+            (
+                "[[tasks]]\nkind = \"panorama\"\n[[tasks]]\nkind = \"science_image\"\nx = 1.0\ny = 1.0\nparallel = true\n",
+                "tasks[1].parallel",
+            ),
+            ("[[tasks]]\nkind = \"panorama\"\nparallel = true\n", "tasks[0].parallel"),
+            ("[[faults]]\nkind = \"silent_sensor\"\n", "faults[0].sensor"),
+            ("[[faults]]\nkind = \"compass_nan\"\nside = \"left\"\n", "faults[0].side"),
+            ("[[faults]]\nkind = \"compass_nan\"\nat_cycle = 1\nat_time_s = 2.0\n", "faults[0].at_time_s"),
+        ] {
+            let err = Mission::from_toml(&format!("{DEFAULT_MISSION_TOML}\n{bad}"), "m.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(field), "{field}: {err}");
+        }
+        let err =
+            Mission::from_toml(&format!("{DEFAULT_MISSION_TOML}\n[[faults]]\nkind = \"meteor\"\n"), "m.toml")
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("meteor") && err.contains("line "), "{err}");
     }
 
     #[test]

@@ -42,6 +42,56 @@ pub struct Report {
     /// Wall-clock compute per navigator cycle, by stage.
     #[serde(default)]
     pub compute_per_cycle: StageTimes,
+    /// Every component's JAUS state at the end of the run, in stepping order.
+    #[serde(default)]
+    pub components: Vec<ComponentReport>,
+    /// The fault that made fault protection stop the rover, if one did.
+    #[serde(default)]
+    pub fault: Option<FaultReport>,
+    /// The mission plan's tasks and how each ended.
+    #[serde(default)]
+    pub tasks: Vec<TaskReport>,
+}
+
+/// A component's final state.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct ComponentReport {
+    /// Component name.
+    pub name: String,
+    /// JAUS state (`Ready`, `Standby`, `Emergency`, `Failure`...).
+    pub state: String,
+    /// Why it last changed state (the fault, for `Failure`).
+    pub message: String,
+}
+
+/// The fault that stopped the mission.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct FaultReport {
+    /// `sensor_fault` | `stuck_wheel` | `localization_failure` | `no_progress` | `component_failure`.
+    pub kind: String,
+    /// The component that reported it, if one did.
+    pub component: Option<String>,
+    /// What was seen.
+    pub message: String,
+    /// Commands executed when fault protection acted.
+    pub cycle: u64,
+    /// Simulated time when fault protection acted (s).
+    pub time_s: f64,
+}
+
+/// One task of the mission plan.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct TaskReport {
+    /// Plan id.
+    pub id: u64,
+    /// `drive_to` | `panorama` | `science_image` | `place_instrument` | `scoop`.
+    pub kind: String,
+    /// Target [x, y] (m), if the task has one.
+    pub target: Option<[f64; 2]>,
+    /// `pending` | `in_process` | `success` | `failure` | `aborted` | `cancelled`.
+    pub state: String,
+    /// The last word on it.
+    pub message: String,
 }
 
 /// Mean wall-clock seconds per cycle spent in each stage of the loop.

@@ -1,11 +1,27 @@
-//! The navigation loop: navigator <-> platform, with the localiser in between.
+//! A run: the world and the mission's components wired on a bus, stepped until the deliberative
+//! layer ends the mission, and scored against simulator truth.
+//!
+//! The loop itself holds no autonomy: the deliberative layer ([`crate::deliberative`]) presents
+//! the plan to the reflexive components ([`crate::reflexive`], [`crate::sensor_servers`]) and the
+//! platform ([`crate::platform`]), which the runtime ([`crate::runtime`]) steps on simulated
+//! time. What the loop does is watch: it reads truth from the platform for the report, the
+//! traverse picture and observers, and relays operator lines and answers.
 
+use crate::components::Port;
+use crate::deliberative::{Deliberative, DeliberativeConfig, TaskSpec};
+use crate::fault_protection::FaultProtectionConfig;
+use crate::messages::{ControlAction, topics};
 use crate::mission::Mission;
-use crate::report::{HazardEvent, Report, StageTimes};
+use crate::operator::OperatorLink;
+use crate::platform::{ArmConfig, ScheduledFault, SimPlatform, ToolingArm};
+use crate::reflexive::{MotionController, NavigatorComponent, PoseEstimatorComponent, PoseEstimatorConfig};
+use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
+use crate::runtime::{Runtime, RuntimeError};
+use crate::sensor_servers::{InertialSensors, RangeSensors, WheelOdometry};
 use crate::world::{World, WorldError, build_world};
+use rovernav_bus::{Bus, BusError, InProcessTransport, Record, Subscriber};
 use rovernav_core::{
-    Goal, Grid2, GridGeometry, NavCommand, NavInput, Navigator, Outcome, Overlay, Point2, Pose3,
-    PoseEstimate, SensorFrame,
+    Grid2, GridGeometry, NavCommand, Navigator, Overlay, Point2, Pose3, PoseEstimate, SensorFrame,
 };
 use rovernav_sim::Simulator;
 use std::time::Instant;
@@ -36,6 +52,12 @@ pub enum RunError {
         /// Registered names.
         known: String,
     },
+    /// The components could not be assembled or stepped.
+    #[error(transparent)]
+    Runtime(#[from] RuntimeError),
+    /// A bus operation of the deliberative layer or the loop failed.
+    #[error(transparent)]
+    Bus(#[from] BusError),
 }
 
 /// What the loop records for pictures and replay.
@@ -112,6 +134,14 @@ pub trait RunObserver {
     fn on_cycle(&mut self, _record: &CycleRecord<'_>) {}
     /// Called once with the final report and trace.
     fn on_finish(&mut self, _report: &Report, _trace: &Trace) {}
+    /// Whether to receive every bus message as JSON ([`RunObserver::on_bus`]); serializing
+    /// every message costs time, so only observers that record the bus ask for it.
+    fn wants_bus(&self) -> bool {
+        false
+    }
+    /// Every message published on the bus since the last call, in publish order, stamped with
+    /// simulated time (called after each cycle and once before `on_finish`).
+    fn on_bus(&mut self, _records: &[Record]) {}
 }
 
 /// An observer that does nothing.
@@ -150,14 +180,50 @@ impl RunSettings {
     }
 }
 
+/// Which bus the components talk over.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BusKind {
+    /// The deterministic in-process bus, without serialization (the default).
+    #[default]
+    InProcess,
+    /// Every message serialized to JSON through the in-process transport, as a networked
+    /// transport would carry it (gives the same run; proves the messages survive the wire).
+    Serialized,
+}
+
+/// What a run does besides driving to the world's goal: the mission's extra tasks, scheduled
+/// faults, the components' parameters and the bus.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Tasks after the goal (`[[tasks]]`).
+    pub tasks: Vec<TaskSpec>,
+    /// Faults the platform injects (`[[faults]]`).
+    pub faults: Vec<ScheduledFault>,
+    /// Fault-protection thresholds.
+    pub fault_protection: FaultProtectionConfig,
+    /// Pose-estimator thresholds.
+    pub pose_estimator: PoseEstimatorConfig,
+    /// Tooling-arm parameters.
+    pub arm: ArmConfig,
+    /// The bus.
+    pub bus: BusKind,
+}
+
+impl RunOptions {
+    /// The tasks and faults of a mission file (targets mapped into the world's local frame).
+    pub fn of(mission: &Mission, world: &World) -> Self {
+        let to_local = crate::world::goal_frame_to_local(mission, world);
+        Self { tasks: mission.plan_tasks(&to_local), faults: mission.fault_schedule(), ..Self::default() }
+    }
+}
+
 /// Runs a mission to completion. `origin` names the mission source in error messages.
 pub fn run_mission(
     mission: &Mission,
     origin: &str,
     on_progress: &mut dyn FnMut(&Progress),
 ) -> Result<RunOutput, RunError> {
-    let world = build_world(mission, origin)?;
-    run_world(world, &RunSettings::of(mission), origin, on_progress)
+    run_mission_observed(mission, origin, on_progress, &mut NoObserver)
 }
 
 /// Runs a traverse in a given world (hand-built scenario terrains use this directly).
@@ -177,8 +243,20 @@ pub fn run_mission_observed(
     on_progress: &mut dyn FnMut(&Progress),
     observer: &mut dyn RunObserver,
 ) -> Result<RunOutput, RunError> {
+    run_mission_with(mission, origin, on_progress, observer, None)
+}
+
+/// [`run_mission_observed`] with an operator sending commands while the mission runs.
+pub fn run_mission_with(
+    mission: &Mission,
+    origin: &str,
+    on_progress: &mut dyn FnMut(&Progress),
+    observer: &mut dyn RunObserver,
+    operator: Option<&mut dyn OperatorLink>,
+) -> Result<RunOutput, RunError> {
     let world = build_world(mission, origin)?;
-    run_world_observed(world, &RunSettings::of(mission), origin, on_progress, observer)
+    let options = RunOptions::of(mission, &world);
+    run_world_with(world, &RunSettings::of(mission), &options, origin, on_progress, observer, operator)
 }
 
 /// [`run_world`] with an observer watching every cycle.
@@ -189,8 +267,23 @@ pub fn run_world_observed(
     on_progress: &mut dyn FnMut(&Progress),
     observer: &mut dyn RunObserver,
 ) -> Result<RunOutput, RunError> {
+    run_world_with(world, mission, &RunOptions::default(), origin, on_progress, observer, None)
+}
+
+/// Runs a traverse through the components and the bus: the deliberative layer presents the plan
+/// to the reflexive layer, the runtime steps the components, and this loop only watches (truth
+/// for scoring and pictures, observer callbacks, operator input and answers).
+pub fn run_world_with(
+    mut world: World,
+    mission: &RunSettings,
+    options: &RunOptions,
+    origin: &str,
+    on_progress: &mut dyn FnMut(&Progress),
+    observer: &mut dyn RunObserver,
+    mut operator: Option<&mut dyn OperatorLink>,
+) -> Result<RunOutput, RunError> {
     let wall = Instant::now();
-    let mut navigator: Box<dyn Navigator> =
+    let navigator: Box<dyn Navigator> =
         rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
             RunError::UnknownNavigator {
                 origin: origin.into(),
@@ -199,21 +292,50 @@ pub fn run_world_observed(
             }
         })?;
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let mut localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
+    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
         .ok_or_else(|| RunError::UnknownLocalizer {
-        origin: origin.into(),
-        name: mission.localizer.clone(),
-        known: rovernav_localization::LOCALIZER_NAMES.join(", "),
-    })?;
-
-    let mut sim = Simulator::new(
+            origin: origin.into(),
+            name: mission.localizer.clone(),
+            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
+        })?;
+    let sim = Simulator::new(
         world.terrain.clone(),
         world.rover.clone(),
         world.sensor_model.clone(),
         world.start,
         mission.seed,
     );
-    let goal: Goal = world.goal.clone();
+
+    let bus = match options.bus {
+        BusKind::InProcess => Bus::in_process(),
+        BusKind::Serialized => Bus::over(Box::new(InProcessTransport::new())),
+    };
+    let mut runtime = Runtime::new(bus)?;
+    let rover = &world.rover;
+    runtime.add(Box::new(NavigatorComponent::new(navigator, &mission.navigator, rover.clone())))?;
+    runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
+    runtime.add(Box::new(MotionController::new()))?;
+    runtime.add(Box::new(SimPlatform::new(sim, options.faults.clone())))?;
+    runtime.add(Box::new(RangeSensors::new()))?;
+    runtime.add(Box::new(InertialSensors::new()))?;
+    runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
+    runtime.add(Box::new(PoseEstimatorComponent::new(localizer, options.pose_estimator.clone())))?;
+    let mut external = Deliberative::ports();
+    external.push(Port::of(topics::OPERATOR_COMMAND));
+    runtime.validate(&external)?;
+    let config = DeliberativeConfig {
+        time_limit_s: mission.time_limit_s,
+        max_cycles: mission.max_cycles,
+        keep_out: world.goal.keep_out.clone(),
+        tolerance: world.goal.tolerance,
+        mast_range_m: world.rover.mast_range,
+        fault_protection: options.fault_protection.clone(),
+    };
+    let mut deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
+    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
+    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
+    runtime.initialize(0.0)?;
+
     let mut trace = Trace::default();
     let dem_geometry = *world.terrain.dem.geometry();
     let sensed_res = dem_geometry.resolution.max(0.1);
@@ -224,80 +346,99 @@ pub fn run_world_observed(
         ..dem_geometry
     };
     let mut sensed = Grid2::filled(sensed_geometry, false);
+    let first_frame = platform(&runtime).initial_frame().clone();
+    trace.truth.push(platform(&runtime).sim().truth());
+    trace.estimate.push(estimator(&runtime).estimate().pose);
+    observer.on_start(&world, mission, &first_frame, &estimator(&runtime).estimate());
+    runtime.command(None, ControlAction::Resume)?;
+    runtime.settle(runtime.clock())?;
 
-    let mut frame: SensorFrame = sim.initial_frame();
-    localizer.update(&frame);
-    trace.truth.push(sim.truth());
-    trace.estimate.push(localizer.estimate().pose);
-    observer.on_start(&world, mission, &frame, &localizer.estimate());
     let mut cycles = 0u64;
-    let mut spent = StageTimes::default();
     let mut last_hazards = 0;
     let mut hazard_events = Vec::new();
     let (outcome, message) = loop {
-        if sim.time() >= mission.time_limit_s {
-            break (Outcome::Timeout, format!("mission time limit of {} s reached", mission.time_limit_s));
+        let now = platform(&runtime).sim().time();
+        if let Some(link) = operator.as_deref_mut() {
+            for line in link.poll(cycles, deliberative.waiting()) {
+                runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
+            }
+            if link.closed() {
+                deliberative.close_input();
+            }
         }
-        if cycles >= mission.max_cycles {
-            break (Outcome::Timeout, format!("cycle limit of {} reached", mission.max_cycles));
+        deliberative.step(runtime.bus())?;
+        forward_replies(runtime.bus(), &replies, operator.as_deref_mut())?;
+        if let Some((outcome, message)) = deliberative.end() {
+            break (*outcome, message.clone());
         }
-        let input = NavInput { time: sim.time(), estimate: localizer.estimate(), goal: &goal, frame: &frame };
-        let started = Instant::now();
-        let command = navigator.step(&input);
-        spent.navigation_s += started.elapsed().as_secs_f64();
-        let plan = navigator.planned_path();
+        runtime.tick(now)?;
+        if let Some(tap) = tap {
+            observer.on_bus(&runtime.bus().take_tap(tap)?);
+        }
+        let executed = platform_mut(&mut runtime).take_executed();
+        let plan = navigator_of(&runtime).planned_path();
         if !plan.is_empty() && trace.plans.last() != Some(&plan) {
             trace.plans.push(plan.clone());
         }
-        if let NavCommand::Finish(outcome, message) = command {
-            break (outcome, message);
-        }
-        let started = Instant::now();
-        frame = sim.execute(&command);
-        spent.platform_s += started.elapsed().as_secs_f64();
-        let started = Instant::now();
-        localizer.update(&frame);
-        spent.localization_s += started.elapsed().as_secs_f64();
-        cycles += 1;
-        let truth = sim.truth();
-        for cloud in &frame.clouds {
-            mark_sensed(&mut sensed, &truth, cloud);
-        }
-        if sim.hazard_contacts() > last_hazards {
-            last_hazards = sim.hazard_contacts();
-            hazard_events.push(HazardEvent {
-                x: truth.x,
-                y: truth.y,
+        let estimate = estimator(&runtime).estimate();
+        for e in executed {
+            cycles += 1;
+            for cloud in &e.frame.clouds {
+                mark_sensed(&mut sensed, &e.truth, cloud);
+            }
+            if e.hazard_contacts > last_hazards {
+                last_hazards = e.hazard_contacts;
+                hazard_events.push(HazardEvent {
+                    x: e.truth.x,
+                    y: e.truth.y,
+                    cycle: cycles,
+                    cause: e.frame.motion_stopped.clone().unwrap_or_default(),
+                });
+            }
+            trace.truth.push(e.truth);
+            trace.estimate.push(estimate.pose);
+            let sim_time_s = e.frame.t;
+            observer.on_cycle(&CycleRecord {
                 cycle: cycles,
-                cause: frame.motion_stopped.clone().unwrap_or_default(),
+                sim_time_s,
+                command: &e.command,
+                frame: &e.frame,
+                estimate: &estimate,
+                truth: &e.truth,
+                plan: &plan,
+                hazard_contacts: e.hazard_contacts,
+            });
+            let goal = deliberative.goal().unwrap_or(world.goal.position);
+            on_progress(&Progress {
+                cycles,
+                sim_time_s,
+                time_fraction: (sim_time_s / mission.time_limit_s).min(1.0),
+                distance_to_goal_m: Point2::new(e.truth.x, e.truth.y).dist(goal),
             });
         }
-        trace.truth.push(truth);
-        let estimate = localizer.estimate();
-        trace.estimate.push(estimate.pose);
-        observer.on_cycle(&CycleRecord {
-            cycle: cycles,
-            sim_time_s: sim.time(),
-            command: &command,
-            frame: &frame,
-            estimate: &estimate,
-            truth: &truth,
-            plan: &plan,
-            hazard_contacts: sim.hazard_contacts(),
-        });
-        let truth_pos = Point2::new(truth.x, truth.y);
-        on_progress(&Progress {
-            cycles,
-            sim_time_s: sim.time(),
-            time_fraction: (sim.time() / mission.time_limit_s).min(1.0),
-            distance_to_goal_m: truth_pos.dist(goal.position),
-        });
     };
-    trace.overlays = navigator.overlays();
+    // The deliberative layer's last state commands (stand down) take effect.
+    runtime.settle(runtime.clock())?;
+    forward_replies(runtime.bus(), &replies, operator)?;
+    if let Some(tap) = tap {
+        observer.on_bus(&runtime.bus().take_tap(tap)?);
+    }
+    trace.overlays = navigator_of(&runtime).overlays();
     trace.sensed = Some(sensed);
 
+    // Operators may have moved the goal: score against the goal the mission ended with.
+    if let Some(goal) = deliberative.goal() {
+        world.goal.position = goal;
+    }
+    let goal = world.goal.clone();
+    let sim = platform(&runtime).sim();
     let truth = sim.truth();
-    let estimate = localizer.estimate().pose;
+    let estimate = estimator(&runtime).estimate().pose;
+    let spent = StageTimes {
+        navigation_s: runtime.busy_s("navigator"),
+        localization_s: runtime.busy_s("pose-estimator"),
+        platform_s: runtime.busy_s("platform"),
+    };
     let report = Report {
         outcome: outcome.as_str().into(),
         message,
@@ -310,20 +451,76 @@ pub fn run_world_observed(
         cycles,
         sensing_actions: sim.sensing_actions(),
         localization_error_m: (truth.x - estimate.x).hypot(truth.y - estimate.y),
-        navigator: navigator.name().to_string(),
+        navigator: navigator_of(&runtime).navigator_name().to_string(),
         localizer: mission.localizer.clone(),
         seed: mission.seed,
         mission: mission.name.clone(),
         straight_line_m: world.start.position().dist(goal.position),
         hazard_events,
         compute_per_cycle: per_cycle(spent, cycles),
+        components: runtime
+            .states()
+            .into_iter()
+            .map(|c| ComponentReport {
+                name: c.name.into(),
+                state: c.state.as_str().into(),
+                message: c.message,
+            })
+            .collect(),
+        fault: deliberative.diagnosis().map(|(d, cycle, time_s)| FaultReport {
+            kind: d.kind.as_str().into(),
+            component: d.component.clone(),
+            message: d.message.clone(),
+            cycle: *cycle,
+            time_s: *time_s,
+        }),
+        tasks: deliberative
+            .tasks()
+            .iter()
+            .map(|t| TaskReport {
+                id: t.id,
+                kind: t.kind.name().into(),
+                target: t.kind.target().map(|p| [p.x, p.y]),
+                state: t.state.as_str().into(),
+                message: t.message.clone(),
+            })
+            .collect(),
     };
     observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
 }
 
+/// Hands the deliberative layer's answers to the operator.
+pub(crate) fn forward_replies<'a>(
+    bus: &mut Bus,
+    replies: &Subscriber<String>,
+    operator: Option<&mut (dyn OperatorLink + 'a)>,
+) -> Result<(), BusError> {
+    let answers = bus.take(replies)?;
+    if let Some(link) = operator {
+        for a in answers.iter().filter(|a| !a.is_empty()) {
+            link.reply(a);
+        }
+    }
+    Ok(())
+}
+
+// Every run adds these components (above), so the look-ups cannot fail.
+fn platform(rt: &Runtime) -> &SimPlatform {
+    rt.get::<SimPlatform>().expect("every run has a platform")
+}
+fn platform_mut(rt: &mut Runtime) -> &mut SimPlatform {
+    rt.get_mut::<SimPlatform>().expect("every run has a platform")
+}
+fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
+    rt.get::<PoseEstimatorComponent>().expect("every run has a pose estimator")
+}
+fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
+    rt.get::<NavigatorComponent>().expect("every run has a navigator")
+}
+
 /// Totals divided by the cycle count (zero when no command ran).
-fn per_cycle(total: StageTimes, cycles: u64) -> StageTimes {
+pub(crate) fn per_cycle(total: StageTimes, cycles: u64) -> StageTimes {
     let n = cycles.max(1) as f64;
     StageTimes {
         navigation_s: total.navigation_s / n,
@@ -333,7 +530,7 @@ fn per_cycle(total: StageTimes, cycles: u64) -> StageTimes {
 }
 
 /// Marks the cells a cloud's points fall in (display only, so true placement is fine).
-fn mark_sensed(sensed: &mut Grid2<bool>, truth: &Pose3, cloud: &rovernav_core::PointCloud) {
+pub(crate) fn mark_sensed(sensed: &mut Grid2<bool>, truth: &Pose3, cloud: &rovernav_core::PointCloud) {
     for p in &cloud.points {
         let w = truth.transform([p[0] as f64, p[1] as f64, p[2] as f64]);
         if let Some((c, r)) = sensed.geometry.cell_of(w[0], w[1]) {

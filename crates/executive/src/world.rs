@@ -190,6 +190,14 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
     })
 }
 
+/// Maps a point given in the mission's goal frame (local metres, or projected metres when the
+/// goal is given as easting and northing) to the world's local frame.
+pub fn goal_frame_to_local(mission: &Mission, world: &World) -> impl Fn(f64, f64) -> Point2 + use<> {
+    let projected = matches!(mission.terrain, TerrainSpec::Dem { .. }) && mission.goal.easting.is_some();
+    let (e0, n0) = (world.terrain.dem.geo.easting, world.terrain.dem.geo.northing);
+    move |x, y| if projected { Point2::new(x - e0, y - n0) } else { Point2::new(x, y) }
+}
+
 /// Maps projected (easting, northing) to the terrain's local frame.
 type ToLocal = dyn Fn(f64, f64) -> (f64, f64);
 

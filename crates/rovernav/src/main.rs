@@ -1,13 +1,16 @@
 //! `rovernav`: run autonomous rover traverses, benchmarks and evaluations from the command line.
 
 mod bench;
+mod campaign;
 mod eval_localization;
 mod eval_terrain;
+mod interactive;
 mod output;
+mod replay;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use rovernav_executive::{Mission, run_mission};
+use rovernav_executive::{Mission, run_mission_observed};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -23,12 +26,16 @@ struct Cli {
 enum Command {
     /// Run a mission (the built-in default mission when no file is given).
     Run(RunArgs),
+    /// Rebuild a run's report.json and traverse.png from its telemetry log alone.
+    Replay(replay::ReplayArgs),
     /// Planner benchmarks on MovingAI maps and PGM cost maps.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
     /// Evaluations against simulator truth.
     #[command(subcommand)]
     Eval(EvalCommand),
+    /// Campaigns: every navigator on the same generated terrains, with a results table and plots.
+    Campaign(campaign::CampaignArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -56,16 +63,23 @@ struct RunArgs {
     /// Output folder (default: out/<mission name>).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Read operator commands (`help` lists them) from standard input while the mission runs;
+    /// the mission starts at once (`mission pause` holds it) and answers go to standard output.
+    #[arg(long)]
+    interactive: bool,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => run(RunArgs::default()),
+        Some(Command::Run(args)) if args.interactive => interactive::run(args),
         Some(Command::Run(args)) => run(args),
+        Some(Command::Replay(args)) => replay::run(args),
         Some(Command::Bench(cmd)) => bench::run(cmd),
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
+        Some(Command::Campaign(args)) => campaign::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -102,9 +116,13 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         bar.set_position((p.time_fraction * 1000.0) as u64);
         bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
     };
-    let output = run_mission(&mission, &origin_of_navigator, &mut on_progress);
+    // Every topic of the run goes to telemetry.mcap; finished even when the run fails.
+    let mut telemetry = rovernav_telemetry::TelemetryRecorder::create(&out_dir.join("telemetry.mcap"))?;
+    let output = run_mission_observed(&mission, &origin_of_navigator, &mut on_progress, &mut telemetry);
     bar.finish_and_clear();
+    let logged = telemetry.finish();
     let output = output?;
+    logged?;
     output::write_run_outputs(&out_dir, &output)?;
     let report = &output.report;
     if args.json {

@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use rovernav_core::Point2;
-use rovernav_executive::RunOutput;
+use rovernav_executive::{Report, RunOutput, Trace, World};
 use rovernav_viz::{TraverseScene, write_traverse_png};
 use std::path::Path;
 
@@ -22,17 +22,20 @@ pub fn write_atomic(
 
 /// Writes report.json and traverse.png into `dir` (created if needed).
 pub fn write_run_outputs(dir: &Path, output: &RunOutput) -> anyhow::Result<()> {
+    write_outputs(dir, &output.report, &output.world, &output.trace)
+}
+
+/// Writes report.json and traverse.png from a run's pieces (a replay rebuilds them from a log).
+pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
     write_atomic(&dir.join("report.json"), |b| {
-        serde_json::to_writer_pretty(&mut *b, &output.report)?;
+        serde_json::to_writer_pretty(&mut *b, report)?;
         b.push(b'\n');
         Ok(())
     })?;
-    let world = &output.world;
-    let trace = &output.trace;
     let keep_out: Vec<Vec<Point2>> = world.goal.keep_out.clone();
-    let hazards: Vec<Point2> = output.report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
+    let hazards: Vec<Point2> = report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
     let scene = TraverseScene {
         terrain: &world.terrain,
         hazard_height: world.rover.clearance,

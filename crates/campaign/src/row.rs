@@ -1,0 +1,292 @@
+//! One row per run: the trial's terrain descriptors and the run report's figures, written as
+//! CSV and as JSON lines.
+
+use crate::plan::{TerrainKind, TrialInfo};
+use rovernav_executive::{Report, StageTimes};
+use serde::{Deserialize, Serialize};
+
+/// The figures of one (trial, navigator) run.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Row {
+    /// Trial index.
+    pub trial: usize,
+    /// `procedural` or `dem`.
+    pub terrain_kind: TerrainKind,
+    /// `yard` or the DEM mission's name.
+    pub terrain: String,
+    /// Seed of the terrain and the sensor noise.
+    pub seed: u64,
+    /// Rock abundance k.
+    pub rock_abundance: f64,
+    /// Regional slope (deg), procedural yards only.
+    pub slope_deg: Option<f64>,
+    /// Relief amplitude (m), procedural yards only.
+    pub relief_m: Option<f64>,
+    /// Yard side (m), procedural yards only.
+    pub size_m: Option<f64>,
+    /// Navigator registry name.
+    pub navigator: String,
+    /// The report's outcome (`reached`, `unreachable`, `help_requested`, `aborted`, `timeout`).
+    pub outcome: String,
+    /// Reached the goal with no hazard contact.
+    pub success: bool,
+    /// True final position to goal (m).
+    pub goal_error_m: f64,
+    /// True path length driven (m).
+    pub distance_driven_m: f64,
+    /// Shortest safe path with full knowledge of the true terrain (m), if one exists.
+    pub optimal_length_m: Option<f64>,
+    /// Distance driven over optimal length, for reached runs with an optimal length.
+    pub path_ratio: Option<f64>,
+    /// Times the true rover entered a hazard.
+    pub hazard_contacts: u32,
+    /// Range images taken.
+    pub sensing_actions: u64,
+    /// Navigator cycles.
+    pub cycles: u64,
+    /// Simulated mission time (s).
+    pub sim_time_s: f64,
+    /// Final |estimate - truth| in the plane (m).
+    pub localization_error_m: f64,
+    /// Wall-clock compute per cycle by stage (machine-dependent).
+    pub compute_per_cycle: StageTimes,
+    /// Wall-clock time of the run (machine-dependent).
+    pub wall_time_s: f64,
+}
+
+/// CSV column names, in the order of [`Row::csv_fields`] (the JSON keys, with
+/// `compute_per_cycle` flattened).
+pub const CSV_HEADER: [&str; 24] = [
+    "trial",
+    "terrain_kind",
+    "terrain",
+    "seed",
+    "rock_abundance",
+    "slope_deg",
+    "relief_m",
+    "size_m",
+    "navigator",
+    "outcome",
+    "success",
+    "goal_error_m",
+    "distance_driven_m",
+    "optimal_length_m",
+    "path_ratio",
+    "hazard_contacts",
+    "sensing_actions",
+    "cycles",
+    "sim_time_s",
+    "localization_error_m",
+    "navigation_s_per_cycle",
+    "localization_s_per_cycle",
+    "platform_s_per_cycle",
+    "wall_time_s",
+];
+
+impl Row {
+    /// The row of `navigator`'s run on a trial.
+    pub fn new(trial: &TrialInfo, navigator: &str, report: &Report) -> Self {
+        let reached = report.outcome == "reached";
+        let path_ratio = match report.optimal_length_m {
+            Some(opt) if reached && opt > 0.0 => Some(report.distance_driven_m / opt),
+            _ => None,
+        };
+        Self {
+            trial: trial.trial,
+            terrain_kind: trial.terrain_kind,
+            terrain: trial.terrain.clone(),
+            seed: trial.seed,
+            rock_abundance: trial.rock_abundance,
+            slope_deg: trial.slope_deg,
+            relief_m: trial.relief_m,
+            size_m: trial.size_m,
+            navigator: navigator.into(),
+            outcome: report.outcome.clone(),
+            success: reached && report.hazard_contacts == 0,
+            goal_error_m: report.goal_error_m,
+            distance_driven_m: report.distance_driven_m,
+            optimal_length_m: report.optimal_length_m,
+            path_ratio,
+            hazard_contacts: report.hazard_contacts,
+            sensing_actions: report.sensing_actions,
+            cycles: report.cycles,
+            sim_time_s: report.sim_time_s,
+            localization_error_m: report.localization_error_m,
+            compute_per_cycle: report.compute_per_cycle,
+            wall_time_s: report.wall_time_s,
+        }
+    }
+
+    /// The trial descriptors this row carries.
+    pub fn trial_info(&self) -> TrialInfo {
+        TrialInfo {
+            trial: self.trial,
+            terrain_kind: self.terrain_kind,
+            terrain: self.terrain.clone(),
+            seed: self.seed,
+            rock_abundance: self.rock_abundance,
+            slope_deg: self.slope_deg,
+            relief_m: self.relief_m,
+            size_m: self.size_m,
+        }
+    }
+
+    /// Picture file name of this run (when it failed), e.g. `trial-0003-nat.png`.
+    pub fn picture_name(&self) -> String {
+        format!("trial-{:04}-{}.png", self.trial, self.navigator)
+    }
+
+    /// The CSV fields, in [`CSV_HEADER`] order; floats in Rust's shortest round-trip form.
+    pub fn csv_fields(&self) -> Vec<String> {
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+        let StageTimes { navigation_s, localization_s, platform_s } = self.compute_per_cycle;
+        vec![
+            self.trial.to_string(),
+            self.terrain_kind.as_str().into(),
+            csv_quote(&self.terrain),
+            self.seed.to_string(),
+            self.rock_abundance.to_string(),
+            opt(self.slope_deg),
+            opt(self.relief_m),
+            opt(self.size_m),
+            csv_quote(&self.navigator),
+            csv_quote(&self.outcome),
+            self.success.to_string(),
+            self.goal_error_m.to_string(),
+            self.distance_driven_m.to_string(),
+            opt(self.optimal_length_m),
+            opt(self.path_ratio),
+            self.hazard_contacts.to_string(),
+            self.sensing_actions.to_string(),
+            self.cycles.to_string(),
+            self.sim_time_s.to_string(),
+            self.localization_error_m.to_string(),
+            navigation_s.to_string(),
+            localization_s.to_string(),
+            platform_s.to_string(),
+            self.wall_time_s.to_string(),
+        ]
+    }
+}
+
+/// A CSV field, quoted (RFC 4180) when it holds a comma, a quote or a line break.
+fn csv_quote(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+}
+
+/// The whole CSV file: header and one line per row.
+pub fn to_csv(rows: &[Row]) -> String {
+    let mut out = CSV_HEADER.join(",");
+    out.push('\n');
+    for r in rows {
+        out.push_str(&r.csv_fields().join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// The rows as JSON lines.
+pub fn to_jsonl(rows: &[Row]) -> String {
+    let mut out = String::new();
+    for r in rows {
+        out.push_str(&serde_json::to_string(r).expect("rows serialise"));
+        out.push('\n');
+    }
+    out
+}
+
+/// Parses JSON lines; `origin` names the file in errors, with the line number.
+pub fn from_jsonl(text: &str, origin: &str) -> Result<Vec<Row>, crate::CampaignError> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str(l).map_err(|e| crate::CampaignError::Parse {
+                path: origin.into(),
+                message: format!("line {}: {e}", i + 1),
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A row with the given figures and plausible others.
+    pub(crate) fn row(trial: usize, nav: &str, outcome: &str, hazards: u32, driven: f64) -> Row {
+        let report = Report {
+            outcome: outcome.into(),
+            navigator: nav.into(),
+            distance_driven_m: driven,
+            optimal_length_m: Some(10.0),
+            hazard_contacts: hazards,
+            sensing_actions: 7,
+            cycles: 20,
+            goal_error_m: 0.3,
+            compute_per_cycle: StageTimes { navigation_s: 0.01, localization_s: 0.001, platform_s: 0.002 },
+            ..Default::default()
+        };
+        let info = TrialInfo {
+            trial,
+            terrain_kind: TerrainKind::Procedural,
+            terrain: "yard".into(),
+            seed: 100 + trial as u64,
+            rock_abundance: [0.05, 0.1, 0.2][trial % 3],
+            slope_deg: Some(1.5),
+            relief_m: Some(0.25),
+            size_m: Some(30.0),
+        };
+        Row::new(&info, nav, &report)
+    }
+
+    #[test]
+    fn success_needs_the_goal_and_no_hazard_contact() {
+        assert!(row(0, "nat", "reached", 0, 12.0).success);
+        assert!(!row(0, "nat", "reached", 1, 12.0).success);
+        assert!(!row(0, "nat", "timeout", 0, 12.0).success);
+    }
+
+    #[test]
+    fn path_ratio_only_for_reached_runs() {
+        assert_eq!(row(0, "nat", "reached", 2, 12.0).path_ratio, Some(1.2));
+        assert_eq!(row(0, "nat", "unreachable", 0, 12.0).path_ratio, None);
+    }
+
+    #[test]
+    fn csv_columns_are_the_json_keys() {
+        let r = row(1, "gestalt+field-dstar", "reached", 0, 11.0);
+        let json = serde_json::to_value(&r).unwrap();
+        let mut keys = Vec::new();
+        for (k, v) in json.as_object().unwrap() {
+            match v.as_object() {
+                Some(inner) => keys.extend(inner.keys().map(|i| format!("{}_per_cycle", i))),
+                None => keys.push(k.clone()),
+            }
+        }
+        keys.sort();
+        let mut header: Vec<String> = CSV_HEADER.iter().map(|s| s.to_string()).collect();
+        header.sort();
+        assert_eq!(keys, header);
+        assert_eq!(r.csv_fields().len(), CSV_HEADER.len());
+    }
+
+    #[test]
+    fn csv_quotes_commas_and_quotes() {
+        assert_eq!(csv_quote("a,b"), "\"a,b\"");
+        assert_eq!(csv_quote("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(csv_quote("plain"), "plain");
+    }
+
+    #[test]
+    fn json_lines_round_trip_exactly() {
+        let mut rows: Vec<Row> = (0..5).map(|i| row(i, "sr2", "reached", 0, 10.0 + 0.1 * i as f64)).collect();
+        rows[2].distance_driven_m = 0.1 + 0.2;
+        rows[3].compute_per_cycle.navigation_s = 1.0 / 3.0;
+        let back = from_jsonl(&to_jsonl(&rows), "rows.jsonl").unwrap();
+        assert_eq!(back, rows);
+        let e = from_jsonl("{\"trial\": 1}\n", "rows.jsonl").unwrap_err().to_string();
+        assert!(e.contains("rows.jsonl") && e.contains("line 1"), "{e}");
+    }
+}

@@ -1,0 +1,494 @@
+//! The platform layer as components: the simulated rover and its tooling arm.
+//!
+//! The simulator stands where MRPTA's platform control layer and sensor hardware stand (paper
+//! 004 section 2): it executes the commands the motion controller passes on, rests (sampling)
+//! when asked or when the runtime's clock has moved on without it, and publishes what its sensors
+//! reported as a frame. Faults scheduled by the mission file
+//! are injected here, on the truth side; nothing downstream learns of them except through the
+//! sensor data. The tooling arm (paper 004 section 4: instrument placement and scooping) has no
+//! mechanism in the simulator: it checks reach and tilt from the pose estimate, holds the rover
+//! still for the operation's duration and succeeds if the wheels did not turn meanwhile.
+
+use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
+use crate::messages::{
+    ArmAction, ArmTaskMsg, CancelMsg, EstimateMsg, FrameMsg, FrameSource, HoldMsg, MotionRequest, Origin,
+    TaskState, TaskStatusMsg, topics,
+};
+use rovernav_bus::{Bus, BusError, Subscriber};
+use rovernav_core::{NavCommand, Point2, Pose3, SensorFrame, angle_diff};
+use rovernav_sim::{Fault, Simulator};
+
+/// Longest hold the platform executes in one step (s), so a bad hold time cannot spin forever.
+const MAX_HOLD_S: f64 = 3600.0;
+
+/// When a scheduled fault starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FaultTrigger {
+    /// Before the n-th command executes (commands count from 1; 0 is before the initial frame).
+    Cycle(u64),
+    /// Before the first action that starts at or after this simulated time (s).
+    Time(f64),
+}
+
+/// A fault the platform injects into the simulator when its trigger comes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScheduledFault {
+    /// The fault.
+    pub fault: Fault,
+    /// When.
+    pub at: FaultTrigger,
+}
+
+/// One command the platform executed, with the truth after it (for scoring and logs only).
+#[derive(Clone, Debug)]
+pub struct Executed {
+    /// The request.
+    pub request: MotionRequest,
+    /// The command as the simulator ran it.
+    pub command: NavCommand,
+    /// What the sensors reported.
+    pub frame: SensorFrame,
+    /// Simulator truth afterwards.
+    pub truth: Pose3,
+    /// Hazard contacts so far.
+    pub hazard_contacts: u32,
+}
+
+/// The simulated rover: the platform layer.
+pub struct SimPlatform {
+    sim: Simulator,
+    faults: Vec<ScheduledFault>,
+    injected: Vec<ScheduledFault>,
+    commands: Option<Subscriber<MotionRequest>>,
+    holds: Option<Subscriber<HoldMsg>>,
+    seq: u64,
+    executed_count: u64,
+    executed: Vec<Executed>,
+    initial_frame: SensorFrame,
+}
+
+impl SimPlatform {
+    /// Wraps a simulator; `faults` are injected when their triggers come.
+    pub fn new(sim: Simulator, faults: Vec<ScheduledFault>) -> Self {
+        Self {
+            sim,
+            faults,
+            injected: Vec::new(),
+            commands: None,
+            holds: None,
+            seq: 0,
+            executed_count: 0,
+            executed: Vec::new(),
+            initial_frame: SensorFrame::default(),
+        }
+    }
+
+    /// The simulator (truth: for scoring, logs and pictures only).
+    pub fn sim(&self) -> &Simulator {
+        &self.sim
+    }
+
+    /// The frame taken at rest before the first command.
+    pub fn initial_frame(&self) -> &SensorFrame {
+        &self.initial_frame
+    }
+
+    /// Takes the commands executed since the last call, in order.
+    pub fn take_executed(&mut self) -> Vec<Executed> {
+        std::mem::take(&mut self.executed)
+    }
+
+    /// Faults injected so far.
+    pub fn injected_faults(&self) -> &[ScheduledFault] {
+        &self.injected
+    }
+
+    /// Injects the faults whose trigger has come, given the number of the next command.
+    fn inject_due(&mut self, next_command: u64) {
+        let time = self.sim.time();
+        let (due, later): (Vec<ScheduledFault>, Vec<ScheduledFault>) =
+            self.faults.iter().partition(|f| match f.at {
+                FaultTrigger::Cycle(n) => n <= next_command,
+                FaultTrigger::Time(t) => t <= time,
+            });
+        for f in &due {
+            self.sim.inject_fault(f.fault);
+        }
+        self.injected.extend(due);
+        self.faults = later;
+    }
+
+    fn publish_frame(
+        &mut self,
+        bus: &mut Bus,
+        source: FrameSource,
+        frame: &SensorFrame,
+    ) -> Result<(), BusError> {
+        self.seq += 1;
+        bus.publish(topics::PLATFORM_FRAME, FrameMsg::new(self.seq, source, frame))
+    }
+
+    /// Rests, sampling, until `until_s` (one frame for the whole hold; nothing if the clock is
+    /// there already). The runtime's clock moving past the platform's is a hold too.
+    fn hold(&mut self, bus: &mut Bus, until_s: f64) -> Result<(), BusError> {
+        let until = until_s.min(self.sim.time() + MAX_HOLD_S);
+        if until.is_nan() || until <= self.sim.time() {
+            return Ok(());
+        }
+        self.inject_due(self.executed_count + 1);
+        let mut frame = SensorFrame::default();
+        while self.sim.time() < until - 1e-9 {
+            // An empty sense request is one sample period at rest.
+            let rest = self.sim.execute(&NavCommand::Sense(Vec::new()));
+            frame.imu.extend(rest.imu);
+            frame.odometry.extend(rest.odometry);
+            frame.proximity = rest.proximity;
+            frame.t = rest.t;
+        }
+        self.publish_frame(bus, FrameSource::Hold, &frame)
+    }
+
+    /// Executes one request.
+    fn execute(&mut self, bus: &mut Bus, request: MotionRequest) -> Result<(), BusError> {
+        let command = request.command.command();
+        if matches!(command, NavCommand::Finish(..)) {
+            return Ok(());
+        }
+        self.inject_due(self.executed_count + 1);
+        let frame = self.sim.execute(&command);
+        self.executed_count += 1;
+        if let Origin::Task(task) = request.origin {
+            let empty: Vec<&str> =
+                frame.clouds.iter().filter(|c| c.points.is_empty()).map(|c| c.camera.as_str()).collect();
+            let (state, message) = match (&frame.motion_stopped, empty.is_empty()) {
+                (Some(why), _) => (TaskState::Failure, format!("motion stopped: {why}")),
+                (None, false) => (TaskState::Failure, format!("no range data from {}", empty.join(", "))),
+                (None, true) if frame.clouds.is_empty() => (TaskState::Success, "done".to_string()),
+                (None, true) => (TaskState::Success, format!("{} images taken", frame.clouds.len())),
+            };
+            bus.publish(
+                topics::TASK_STATUS,
+                TaskStatusMsg { task, component: self.name().into(), state, outcome: None, message },
+            )?;
+        }
+        self.publish_frame(bus, FrameSource::Command(request.clone()), &frame)?;
+        self.executed.push(Executed {
+            request,
+            command,
+            truth: self.sim.truth(),
+            hazard_contacts: self.sim.hazard_contacts(),
+            frame,
+        });
+        Ok(())
+    }
+
+    fn take_holds(&mut self, bus: &mut Bus) -> Result<Option<f64>, BusError> {
+        let Some(holds) = &self.holds else { return Ok(None) };
+        Ok(bus.take(holds)?.iter().map(|h| h.until_s).filter(|t| t.is_finite()).reduce(f64::max))
+    }
+}
+
+impl Component for SimPlatform {
+    fn name(&self) -> &'static str {
+        "platform"
+    }
+
+    fn ports(&self) -> Ports {
+        Ports {
+            inputs: vec![Port::of(topics::PLATFORM_COMMAND), Port::of(topics::PLATFORM_HOLD)],
+            outputs: vec![Port::of(topics::PLATFORM_FRAME), Port::of(topics::TASK_STATUS)],
+        }
+    }
+
+    fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        self.commands = Some(bus.subscribe(topics::PLATFORM_COMMAND)?);
+        self.holds = Some(bus.subscribe(topics::PLATFORM_HOLD)?);
+        Ok(())
+    }
+
+    /// Samples at rest before the first command (lets the pose estimator find the gyro bias).
+    fn initialize(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        if self.seq == 0 {
+            self.inject_due(0);
+            self.initial_frame = self.sim.initial_frame();
+            let frame = self.initial_frame.clone();
+            ctx.bus.publish(topics::PLATFORM_FRAME, FrameMsg::new(0, FrameSource::Initial, &frame))?;
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        self.hold(ctx.bus, ctx.time_s)?;
+        let commands = match &self.commands {
+            Some(s) => ctx.bus.take(s)?,
+            None => Vec::new(),
+        };
+        for request in commands {
+            self.execute(ctx.bus, (*request).clone())?;
+        }
+        if let Some(until) = self.take_holds(ctx.bus)? {
+            self.hold(ctx.bus, until)?;
+        }
+        Ok(())
+    }
+
+    /// Standing by or stopped, the wheels stay locked (commands are refused) but the sensors
+    /// keep sampling through holds.
+    fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
+        self.hold(ctx.bus, ctx.time_s)?;
+        let commands = match &self.commands {
+            Some(s) => ctx.bus.take(s)?,
+            None => Vec::new(),
+        };
+        for request in commands {
+            if let Origin::Task(task) = request.origin {
+                let message = format!("platform in {state}: command refused");
+                ctx.bus.publish(
+                    topics::TASK_STATUS,
+                    TaskStatusMsg {
+                        task,
+                        component: self.name().into(),
+                        state: TaskState::Aborted,
+                        outcome: None,
+                        message,
+                    },
+                )?;
+            }
+        }
+        if let Some(until) = self.take_holds(ctx.bus)? {
+            self.hold(ctx.bus, until)?;
+        }
+        Ok(())
+    }
+}
+
+/// Tooling-arm parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmConfig {
+    /// Nearest reachable target, ahead of the rover centre (m).
+    pub reach_min_m: f64,
+    /// Farthest reachable target (m).
+    pub reach_max_m: f64,
+    /// Largest bearing off the rover's forward axis (rad).
+    pub max_bearing: f64,
+    /// Steepest body tilt at which the arm may work (rad).
+    pub max_tilt: f64,
+    /// Time to place an instrument (s).
+    pub place_s: f64,
+    /// Time to scoop: open, lower, cut, close (s).
+    pub scoop_s: f64,
+}
+
+impl Default for ArmConfig {
+    fn default() -> Self {
+        Self {
+            reach_min_m: 0.4,
+            reach_max_m: 1.2,
+            max_bearing: 45f64.to_radians(),
+            max_tilt: 15f64.to_radians(),
+            place_s: 30.0,
+            scoop_s: 60.0,
+        }
+    }
+}
+
+/// The operation under way.
+#[derive(Clone, Copy, Debug)]
+struct ArmWork {
+    task: u64,
+    action: ArmAction,
+    until_s: f64,
+    counts: Option<(i64, i64)>,
+}
+
+/// The tooling arm: places an instrument or scoops at a target in front of the rover.
+pub struct ToolingArm {
+    config: ArmConfig,
+    commands: Option<Subscriber<ArmTaskMsg>>,
+    cancels: Option<Subscriber<CancelMsg>>,
+    estimates: Option<Subscriber<EstimateMsg>>,
+    frames: Option<Subscriber<FrameMsg>>,
+    estimate: Option<EstimateMsg>,
+    counts: Option<(i64, i64)>,
+    work: Option<ArmWork>,
+}
+
+impl ToolingArm {
+    /// An idle arm.
+    pub fn new(config: ArmConfig) -> Self {
+        Self {
+            config,
+            commands: None,
+            cancels: None,
+            estimates: None,
+            frames: None,
+            estimate: None,
+            counts: None,
+            work: None,
+        }
+    }
+
+    fn status(&self, bus: &mut Bus, task: u64, state: TaskState, message: String) -> Result<(), BusError> {
+        bus.publish(
+            topics::TASK_STATUS,
+            TaskStatusMsg { task, component: "tooling-arm".into(), state, outcome: None, message },
+        )
+    }
+
+    /// Why the arm cannot work on `target` from the current estimate, if it cannot.
+    fn unreachable(&self, target: Point2) -> Option<String> {
+        let Some(est) = &self.estimate else {
+            return Some("no pose estimate yet".into());
+        };
+        let pose = est.pose;
+        let offset = target.sub(Point2::new(pose.x, pose.y));
+        let range = offset.norm();
+        let bearing = angle_diff(offset.angle(), pose.yaw);
+        let c = &self.config;
+        if !(c.reach_min_m..=c.reach_max_m).contains(&range) {
+            return Some(format!(
+                "target {range:.2} m from the rover, outside the arm's reach ({:.2}-{:.2} m)",
+                c.reach_min_m, c.reach_max_m
+            ));
+        }
+        if bearing.abs() > c.max_bearing {
+            return Some(format!(
+                "target {:.0} deg off the rover's heading, beyond the arm's {:.0} deg",
+                bearing.to_degrees(),
+                c.max_bearing.to_degrees()
+            ));
+        }
+        let tilt = (pose.roll.cos() * pose.pitch.cos()).clamp(-1.0, 1.0).acos();
+        if tilt > c.max_tilt {
+            return Some(format!(
+                "rover tilted {:.1} deg, beyond the arm's {:.0} deg",
+                tilt.to_degrees(),
+                c.max_tilt.to_degrees()
+            ));
+        }
+        None
+    }
+
+    fn absorb(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
+        if let Some(s) = &self.estimates
+            && let Some(e) = ctx.bus.latest(s)?
+        {
+            self.estimate = Some(*e);
+        }
+        let frames = match &self.frames {
+            Some(s) => ctx.bus.take(s)?,
+            None => Vec::new(),
+        };
+        let cancels = match &self.cancels {
+            Some(s) => ctx.bus.take(s)?,
+            None => Vec::new(),
+        };
+        for c in cancels {
+            if let Some(w) = self.work
+                && w.task == c.task
+            {
+                self.work = None;
+                self.status(ctx.bus, w.task, TaskState::Cancelled, "cancelled".into())?;
+            }
+        }
+        for f in &frames {
+            if let Some(o) = f.odometry.last() {
+                self.counts = Some((o.left_counts, o.right_counts));
+            }
+            let Some(w) = self.work else { continue };
+            if f.t + 1e-9 >= w.until_s {
+                self.work = None;
+                let (state, message) = if w.counts == self.counts {
+                    let what = match w.action {
+                        ArmAction::PlaceInstrument => "instrument placed",
+                        ArmAction::Scoop => "soil sample scooped",
+                    };
+                    (TaskState::Success, what.to_string())
+                } else {
+                    (TaskState::Failure, "the wheels turned while the arm was deployed".to_string())
+                };
+                self.status(ctx.bus, w.task, state, message)?;
+            }
+        }
+        let commands = match &self.commands {
+            Some(s) => ctx.bus.take(s)?,
+            None => Vec::new(),
+        };
+        for cmd in commands {
+            if state != JausState::Ready {
+                self.status(ctx.bus, cmd.task, TaskState::Aborted, format!("tooling arm in {state}"))?;
+                continue;
+            }
+            if let Some(w) = self.work {
+                self.status(ctx.bus, cmd.task, TaskState::Failure, format!("arm busy with task {}", w.task))?;
+                continue;
+            }
+            if let Some(why) = self.unreachable(Point2::new(cmd.target[0], cmd.target[1])) {
+                self.status(ctx.bus, cmd.task, TaskState::Failure, why)?;
+                continue;
+            }
+            let duration = match cmd.action {
+                ArmAction::PlaceInstrument => self.config.place_s,
+                ArmAction::Scoop => self.config.scoop_s,
+            };
+            let until_s = ctx.time_s + duration;
+            self.work = Some(ArmWork { task: cmd.task, action: cmd.action, until_s, counts: self.counts });
+            self.status(
+                ctx.bus,
+                cmd.task,
+                TaskState::InProcess,
+                format!("working until t = {until_s:.1} s"),
+            )?;
+            ctx.bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s })?;
+        }
+        Ok(())
+    }
+}
+
+impl Component for ToolingArm {
+    fn name(&self) -> &'static str {
+        "tooling-arm"
+    }
+
+    fn ports(&self) -> Ports {
+        Ports {
+            inputs: vec![
+                Port::of(topics::ARM_COMMAND),
+                Port::of(topics::EXECUTIVE_CANCEL),
+                Port::of(topics::LOCALIZATION_ESTIMATE),
+                Port::of(topics::PLATFORM_FRAME),
+            ],
+            outputs: vec![Port::of(topics::PLATFORM_HOLD), Port::of(topics::TASK_STATUS)],
+        }
+    }
+
+    fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        self.commands = Some(bus.subscribe(topics::ARM_COMMAND)?);
+        self.cancels = Some(bus.subscribe(topics::EXECUTIVE_CANCEL)?);
+        self.estimates = Some(bus.subscribe(topics::LOCALIZATION_ESTIMATE)?);
+        self.frames = Some(bus.subscribe(topics::PLATFORM_FRAME)?);
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        self.absorb(ctx, JausState::Ready)
+    }
+
+    fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
+        self.absorb(ctx, state)
+    }
+
+    fn on_transition(
+        &mut self,
+        ctx: &mut Ctx<'_>,
+        _from: JausState,
+        to: JausState,
+    ) -> Result<(), ComponentFault> {
+        if matches!(to, JausState::Emergency | JausState::Failure | JausState::Shutdown)
+            && let Some(w) = self.work.take()
+        {
+            self.status(ctx.bus, w.task, TaskState::Aborted, format!("arm stowed: {to}"))?;
+        }
+        Ok(())
+    }
+}

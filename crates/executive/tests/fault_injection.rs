@@ -1,0 +1,140 @@
+//! Fault injection from the mission file: a sensor that goes silent, a wheel that stalls and a
+//! compass that reads NaN each stop the rover with `help_requested`, the component that serves
+//! the sensor in Failure, a message naming the fault, and every executed command in the log.
+
+use rovernav_core::{NavCommand, SensorFrame};
+use rovernav_executive::{CycleRecord, Mission, Report, RunObserver, Trace, World, run_mission_observed};
+
+/// A 12 m yard with one `[[faults]]` entry.
+fn mission_with_fault(fault: &str) -> Mission {
+    let text = format!(
+        r#"
+name = "fault-yard"
+seed = 3
+[terrain]
+kind = "procedural"
+size_m = 12.0
+resolution_m = 0.05
+rock_abundance = 0.12
+[start]
+x = 2.0
+y = 2.0
+yaw_deg = 10.0
+[goal]
+x = 9.5
+y = 8.5
+[[faults]]
+{fault}
+"#
+    );
+    Mission::from_toml(&text, "fault-yard").expect("valid mission")
+}
+
+/// Keeps everything the run hands to observers.
+#[derive(Default)]
+struct Log {
+    started: bool,
+    cycles: Vec<u64>,
+    commands: Vec<NavCommand>,
+    frames: Vec<SensorFrame>,
+    finished: Option<(Report, usize)>,
+}
+
+impl RunObserver for Log {
+    fn on_start(
+        &mut self,
+        _world: &World,
+        _settings: &rovernav_executive::RunSettings,
+        _frame: &SensorFrame,
+        _estimate: &rovernav_core::PoseEstimate,
+    ) {
+        self.started = true;
+    }
+    fn on_cycle(&mut self, record: &CycleRecord<'_>) {
+        self.cycles.push(record.cycle);
+        self.commands.push(record.command.clone());
+        self.frames.push(record.frame.clone());
+    }
+    fn on_finish(&mut self, report: &Report, trace: &Trace) {
+        self.finished = Some((report.clone(), trace.truth.len()));
+    }
+}
+
+/// Runs the mission and checks what every fault must give; returns the report and the log.
+fn run_and_check_stop(fault: &str, component: &str, kind: &str) -> (Report, Log) {
+    let mut log = Log::default();
+    let out = run_mission_observed(&mission_with_fault(fault), "fault-yard", &mut |_| {}, &mut log).unwrap();
+    let r = out.report.clone();
+    assert_eq!(r.outcome, "help_requested", "{}", r.message);
+    let fault_report = r.fault.clone().expect("fault protection acted");
+    assert_eq!(fault_report.kind, kind);
+    assert_eq!(fault_report.component.as_deref(), Some(component));
+    assert!(r.message.contains("asking for help") && r.message.contains(component), "{}", r.message);
+    // The faulty component is in Failure; fault protection stood every other one down.
+    for c in &r.components {
+        let expected = if c.name == component { "Failure" } else { "Standby" };
+        assert_eq!(c.state, expected, "{}: {}", c.name, c.message);
+    }
+    // Stopped at once: no command after the one that revealed the fault.
+    assert_eq!(fault_report.cycle, r.cycles, "no command after fault protection acted");
+    assert_eq!(r.tasks[0].state, "aborted");
+    // Nothing lost: every executed command reached the observer, in order, and the trace.
+    assert!(log.started);
+    assert_eq!(log.cycles, (1..=r.cycles).collect::<Vec<_>>());
+    assert_eq!(out.trace.truth.len() as u64, r.cycles + 1);
+    let (finished, truth_len) = log.finished.as_ref().expect("on_finish called");
+    assert_eq!(finished, &r);
+    assert_eq!(*truth_len, out.trace.truth.len());
+    (r, log)
+}
+
+#[test]
+fn a_mast_camera_that_goes_silent_stops_the_rover_with_a_sensor_fault() {
+    let (r, log) = run_and_check_stop(
+        "kind = \"silent_sensor\"\nsensor = \"mast\"\nat_cycle = 4",
+        "range-sensors",
+        "sensor_fault",
+    );
+    let message = &r.fault.as_ref().unwrap().message;
+    assert!(message.contains("mast stereo") && message.contains("no range points"), "{message}");
+    // Independent check on the logged data: the command that revealed the fault returned empty
+    // mast images, and every mast image before the fault had points.
+    let last = log.frames.last().unwrap();
+    assert!(last.clouds.iter().any(|c| c.points.is_empty()));
+    let before: Vec<&SensorFrame> = log.frames[..3].iter().collect();
+    assert!(before.iter().flat_map(|f| &f.clouds).all(|c| !c.points.is_empty()));
+    assert!(r.cycles >= 4, "the fault starts at command 4");
+}
+
+#[test]
+fn a_stalled_wheel_stops_the_rover_with_a_stuck_wheel_fault() {
+    let (r, log) = run_and_check_stop(
+        "kind = \"stalled_wheel\"\nside = \"left\"\nat_cycle = 3",
+        "wheel-odometry",
+        "stuck_wheel",
+    );
+    let message = &r.fault.as_ref().unwrap().message;
+    assert!(message.contains("stuck wheel") && message.contains("left"), "{message}");
+    // It was the first motion at or after command 3 that revealed it.
+    let first_motion = log
+        .commands
+        .iter()
+        .zip(&log.cycles)
+        .find(|(c, n)| **n >= 3 && matches!(c, NavCommand::Drive { .. } | NavCommand::Turn { .. }))
+        .map(|(_, n)| *n)
+        .expect("the rover tried to move");
+    assert_eq!(r.cycles, first_motion);
+}
+
+#[test]
+fn a_compass_reading_nan_stops_the_rover_with_a_sensor_fault() {
+    let (r, log) =
+        run_and_check_stop("kind = \"compass_nan\"\nat_time_s = 30.0", "inertial-sensors", "sensor_fault");
+    let message = &r.fault.as_ref().unwrap().message;
+    assert!(message.contains("compass") && message.contains("NaN"), "{message}");
+    // The logged samples show the NaN: the last frame has one, no earlier frame does.
+    let has_nan = |f: &SensorFrame| f.imu.iter().any(|s| s.compass_yaw.is_nan());
+    assert!(has_nan(log.frames.last().unwrap()));
+    assert!(log.frames[..log.frames.len() - 1].iter().all(|f| !has_nan(f)));
+    assert!(log.frames.last().unwrap().t >= 30.0);
+}

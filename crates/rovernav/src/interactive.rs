@@ -1,0 +1,123 @@
+//! `rovernav run --interactive`: operator commands from standard input while the mission runs.
+//!
+//! A reader thread feeds standard-input lines into a channel that the run polls once per cycle,
+//! taking one line a cycle; each line goes to the deliberative layer on the `/operator/command` topic and its answer comes
+//! back on `/operator/reply`, printed on standard output (errors name the wrong token). The
+//! mission starts at once, which suits scripts (`printf 'goto 8 3\n' | rovernav run
+//! --interactive`); `mission pause` holds it and `mission start` resumes. While the mission
+//! waits for the operator the run waits for input in wall-clock time, so a paused rover does not
+//! burn through its simulated time budget; when input ends, a running mission carries on and a
+//! waiting one is aborted. Banner and progress go to standard error.
+
+use crate::RunArgs;
+use rovernav_executive::{Mission, OperatorLink, run_mission_with};
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
+use std::time::Duration;
+
+/// How long a waiting mission waits for a line per cycle (wall clock).
+const WAIT_FOR_INPUT: Duration = Duration::from_millis(100);
+
+/// Standard input and output as the operator's link.
+struct StdinLink {
+    lines: Receiver<String>,
+    closed: bool,
+}
+
+impl StdinLink {
+    /// Starts the reader thread.
+    fn spawn() -> Self {
+        let (send, lines) = channel();
+        std::thread::spawn(move || {
+            for line in std::io::stdin().lock().lines() {
+                // A read error ends input like end of file does.
+                let Ok(line) = line else { break };
+                if send.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Self { lines, closed: false }
+    }
+}
+
+impl OperatorLink for StdinLink {
+    /// One line per cycle, so that each line sees what the one before did (a `status` after
+    /// `drive 1` shows the rover moved), as typed commands would.
+    fn poll(&mut self, _cycles: u64, waiting: bool) -> Vec<String> {
+        if self.closed {
+            return Vec::new();
+        }
+        let next = if waiting {
+            self.lines.recv_timeout(WAIT_FOR_INPUT).map_err(|e| e == RecvTimeoutError::Disconnected)
+        } else {
+            self.lines.try_recv().map_err(|e| e == TryRecvError::Disconnected)
+        };
+        match next {
+            Ok(line) => vec![line],
+            Err(disconnected) => {
+                self.closed = disconnected;
+                Vec::new()
+            }
+        }
+    }
+
+    fn reply(&mut self, text: &str) {
+        let mut stdout = std::io::stdout().lock();
+        // A closed standard output (the operator went away) must not stop the mission.
+        let _ = writeln!(stdout, "{text}");
+        let _ = stdout.flush();
+    }
+
+    fn closed(&self) -> bool {
+        self.closed
+    }
+}
+
+/// Runs a mission with operator commands from standard input.
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let (mut mission, origin) = match &args.mission {
+        Some(path) => (Mission::from_file(path)?, path.display().to_string()),
+        None => (Mission::default_mission(), "built-in default mission".to_string()),
+    };
+    let mut origin_of_navigator = origin.clone();
+    if let Some(seed) = args.seed {
+        mission.seed = seed;
+    }
+    if let Some(nav) = &args.navigator {
+        mission.navigator = nav.clone();
+        origin_of_navigator = "--navigator".into();
+    }
+    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
+    eprintln!(
+        "rovernav: mission `{}` running with operator input; `help` lists the commands, `mission pause` holds the rover",
+        mission.name
+    );
+    let mut link = StdinLink::spawn();
+    let mut telemetry = rovernav_telemetry::TelemetryRecorder::create(&out_dir.join("telemetry.mcap"))?;
+    let output =
+        run_mission_with(&mission, &origin_of_navigator, &mut |_| {}, &mut telemetry, Some(&mut link));
+    let logged = telemetry.finish();
+    let output = output?;
+    logged?;
+    crate::output::write_run_outputs(&out_dir, &output)?;
+    let r = &output.report;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(r)?);
+    } else {
+        println!(
+            "{}: {} ({}) · {} · goal error {:.2} m · driven {:.1} m · {} cycles · {:.0} s simulated",
+            r.mission,
+            r.outcome,
+            r.navigator,
+            r.message,
+            r.goal_error_m,
+            r.distance_driven_m,
+            r.cycles,
+            r.sim_time_s,
+        );
+        println!("outputs in {}", out_dir.display());
+    }
+    Ok(())
+}

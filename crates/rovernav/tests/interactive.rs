@@ -1,0 +1,53 @@
+//! `rovernav run --interactive` with commands piped in: a new goal, a status query and a bad
+//! command while a small mission runs.
+
+use std::io::Write;
+use std::process::{Command, Stdio};
+
+const MISSION: &str = r#"
+name = "interactive-yard"
+seed = 3
+[terrain]
+kind = "procedural"
+size_m = 12.0
+resolution_m = 0.05
+rock_abundance = 0.12
+[start]
+x = 2.0
+y = 2.0
+yaw_deg = 10.0
+[goal]
+x = 9.5
+y = 8.5
+"#;
+
+#[test]
+fn piped_commands_change_the_goal_answer_status_and_name_the_bad_token() {
+    let dir = std::env::temp_dir().join(format!("rovernav-interactive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mission = dir.join("mission.toml");
+    std::fs::write(&mission, MISSION).unwrap();
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
+        .args(["run", mission.to_str().unwrap(), "--interactive", "--out", out.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    child.stdin.take().unwrap().write_all(b"goto 3.5 9\nstatus\nwarp 9\n").unwrap();
+    let result = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "stdout: {stdout}\nstderr: {stderr}");
+    assert!(stdout.contains("goal set to (3.50, 9.00)"), "{stdout}");
+    assert!(stdout.contains("mission running") && stdout.contains("goal (3.50, 9.00)"), "{stdout}");
+    let error = stdout.lines().find(|l| l.starts_with("error:")).expect("an error answer");
+    assert!(error.contains("\"warp\""), "the error names the wrong token: {error}");
+    // The report scores the run against the operator's goal.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["outcome"], "reached", "{report}");
+    assert!(report["goal_error_m"].as_f64().unwrap() < 1.0, "{report}");
+    assert_eq!(report["tasks"][0]["target"], serde_json::json!([3.5, 9.0]));
+}

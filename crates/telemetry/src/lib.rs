@@ -1,0 +1,29 @@
+//! Telemetry: every topic of a run logged to an MCAP file (the log format of ROS 2 and
+//! Foxglove), and the reader that rebuilds the run from the log alone.
+//!
+//! - [`TelemetryWriter`]: a generic MCAP writer (JSON messages with JSON Schemas, lz4 chunks,
+//!   a flush policy so a killed process loses at most about a second).
+//! - [`TelemetryRecorder`]: a `RunObserver` that logs the world, settings, sensor frames,
+//!   commands, plans, estimates, truth, hazard contacts, overlays and the report
+//!   ([`messages::topics`]).
+//! - [`read_log`]: reads a log linearly, tolerating a truncated file, and
+//!   [`LoggedRun::replay`] rebuilds the world, trace and report from it.
+//!
+//! Log and publish times are simulated time in nanoseconds, so a seeded run logs the same
+//! timestamps every time; wall time appears only in `/executive/cycle` and the report.
+
+#![warn(missing_docs)]
+
+pub mod base64;
+pub mod messages;
+pub mod reader;
+pub mod recorder;
+pub mod schema;
+pub mod writer;
+
+/// The MCAP library the log is written with, for callers that want its raw records or its
+/// reader (the tests read logs with it, independently of [`read_log`]).
+pub use mcap;
+pub use reader::{LogEnd, LoggedRun, ReplayedRun, parse_log, read_log};
+pub use recorder::{TelemetryRecorder, topic_table};
+pub use writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};

@@ -1,0 +1,262 @@
+//! The run observer that logs every topic of a run to MCAP.
+
+use crate::messages::{
+    CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, SensorFrameMsg, SettingsMsg,
+    TruthMsg, WorldMsg, report_schema, topics,
+};
+use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
+use rovernav_core::{Point2, Pose2, Pose3, PoseEstimate, SensorFrame, wrap_angle};
+use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
+use rovernav_sim::VehicleGeometry;
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, mpsc};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Every topic with its schema name, schema and whether it carries simulation truth.
+pub fn topic_table() -> Vec<(&'static str, &'static str, Value, bool)> {
+    vec![
+        (topics::WORLD, "rovernav.World", WorldMsg::schema(), true),
+        (topics::SETTINGS, "rovernav.RunSettings", SettingsMsg::schema(), false),
+        (topics::SENSOR_FRAME, "rovernav.SensorFrame", SensorFrameMsg::schema(), false),
+        (topics::ESTIMATE, "rovernav.PoseEstimate", EstimateMsg::schema(), false),
+        (topics::TRUTH, "rovernav.Truth", TruthMsg::schema(), true),
+        (topics::CYCLE, "rovernav.Cycle", CycleMsg::schema(), false),
+        (topics::COMMAND, "rovernav.NavCommand", CommandMsg::schema(), false),
+        (topics::PLAN, "rovernav.Plan", PlanMsg::schema(), false),
+        (topics::HAZARD_CONTACTS, "rovernav.HazardContact", HazardContactMsg::schema(), true),
+        (topics::OVERLAYS, "rovernav.Overlays", OverlaysMsg::schema(), false),
+        (topics::REPORT, "rovernav.Report", report_schema(), false),
+    ]
+}
+
+/// The writer and the first error, shared with the flusher thread.
+struct Shared<W: Write + Seek> {
+    writer: Option<TelemetryWriter<W>>,
+    error: Option<TelemetryError>,
+}
+
+impl<W: Write + Seek> Shared<W> {
+    /// Runs `f` on the writer unless an earlier write failed; keeps the first error.
+    fn apply(&mut self, f: impl FnOnce(&mut TelemetryWriter<W>) -> Result<(), TelemetryError>) {
+        if self.error.is_none()
+            && let Some(w) = self.writer.as_mut()
+            && let Err(e) = f(w)
+        {
+            self.error = Some(e);
+        }
+    }
+}
+
+fn lock<W: Write + Seek>(shared: &Mutex<Shared<W>>) -> MutexGuard<'_, Shared<W>> {
+    // A panic elsewhere while the lock was held leaves the writer usable: finish the log anyway.
+    shared.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Logs a run: attach it to `run_mission_observed`, then call [`TelemetryRecorder::finish`].
+///
+/// The loop closes a chunk at the end of a cycle when the flush policy says so; a timer thread
+/// also closes the open chunk once it is older than the policy's interval, so that slow cycles
+/// or the work after the last cycle never hold more than that in memory. Observer callbacks
+/// cannot fail, so the first write error is kept, logging stops, and `finish` returns it.
+/// Dropping the recorder without `finish` (a panic) still finishes the file.
+pub struct TelemetryRecorder<W: Write + Seek + Send + 'static = BufWriter<File>> {
+    shared: Arc<Mutex<Shared<W>>>,
+    flusher: Option<(mpsc::Sender<()>, JoinHandle<()>)>,
+    opened: Instant,
+    last_time_ns: u64,
+    last_plan: Option<Vec<Point2>>,
+    plans_logged: usize,
+    last_hazards: u32,
+}
+
+impl TelemetryRecorder<BufWriter<File>> {
+    /// Opens a log file (its folder is created if needed) with the default flush policy.
+    pub fn create(path: &Path) -> Result<Self, TelemetryError> {
+        Self::new(TelemetryWriter::create(path, FlushPolicy::default())?)
+    }
+}
+
+impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
+    /// Declares every topic on a writer and starts its flush timer.
+    pub fn new(mut writer: TelemetryWriter<W>) -> Result<Self, TelemetryError> {
+        for (topic, name, schema, truth) in topic_table() {
+            let mut metadata = BTreeMap::new();
+            if truth {
+                metadata.insert("simulation_truth".to_string(), "true".to_string());
+            }
+            writer.add_topic(topic, name, &schema, &metadata)?;
+        }
+        let tick = (writer.policy().max_interval / 4).max(Duration::from_millis(10));
+        let path = writer.path().to_path_buf();
+        let shared = Arc::new(Mutex::new(Shared { writer: Some(writer), error: None }));
+        let (stop, stopped) = mpsc::channel::<()>();
+        let timer_shared = Arc::clone(&shared);
+        let handle = std::thread::Builder::new()
+            .name("telemetry-flush".into())
+            .spawn(move || {
+                while let Err(mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(tick) {
+                    lock(&timer_shared).apply(|w| w.flush_if_stale_at(Instant::now()).map(|_| ()));
+                }
+            })
+            .map_err(|error| TelemetryError::Io { path, error })?;
+        Ok(Self {
+            shared,
+            flusher: Some((stop, handle)),
+            opened: Instant::now(),
+            last_time_ns: 0,
+            last_plan: None,
+            plans_logged: 0,
+            last_hazards: 0,
+        })
+    }
+
+    /// Log time of a simulated time: nanoseconds, never earlier than the previous message.
+    fn stamp(&mut self, sim_time_s: f64) -> u64 {
+        let ns =
+            if sim_time_s.is_finite() && sim_time_s > 0.0 { (sim_time_s * 1e9).round() as u64 } else { 0 };
+        self.last_time_ns = self.last_time_ns.max(ns);
+        self.last_time_ns
+    }
+
+    fn put<T: Serialize>(&self, topic: &str, time_ns: u64, msg: &T) {
+        lock(&self.shared).apply(|w| w.write(topic, time_ns, msg));
+    }
+
+    fn end_cycle(&self, cycle: u64, sim_time_s: f64, t: u64) {
+        let wall_time_s = self.opened.elapsed().as_secs_f64();
+        self.put(topics::CYCLE, t, &CycleMsg { cycle, sim_time_s, wall_time_s });
+    }
+
+    /// Logs a plan when it differs from the last one, by the loop's rule for `Trace::plans`.
+    fn put_plan(&mut self, cycle: u64, sim_time_s: f64, t: u64, plan: &[Point2]) {
+        if plan.is_empty() || self.last_plan.as_deref() == Some(plan) {
+            return;
+        }
+        self.put(
+            topics::PLAN,
+            t,
+            &PlanMsg { cycle, sim_time_s, points: plan.iter().map(|&p| p.into()).collect() },
+        );
+        self.last_plan = Some(plan.to_vec());
+        self.plans_logged += 1;
+    }
+
+    /// Stops the flush timer.
+    fn stop_timer(&mut self) {
+        if let Some((stop, handle)) = self.flusher.take() {
+            drop(stop);
+            // The timer only flushes; if it panicked, finishing below reports any write error.
+            let _ = handle.join();
+        }
+    }
+
+    /// Closes the last chunk and writes the summary; returns the first error of the run.
+    pub fn finish(mut self) -> Result<LogStats, TelemetryError> {
+        self.stop_timer();
+        let mut shared = lock(&self.shared);
+        let finished = match shared.writer.take() {
+            Some(w) => w.finish(),
+            None => Ok(LogStats::default()),
+        };
+        match shared.error.take() {
+            Some(e) => Err(e),
+            None => finished,
+        }
+    }
+}
+
+impl<W: Write + Seek + Send + 'static> Drop for TelemetryRecorder<W> {
+    fn drop(&mut self) {
+        self.stop_timer();
+        // Without `finish` (a panic unwinding through the run): close the file properly anyway.
+        if let Some(w) = lock(&self.shared).writer.take() {
+            let _ = w.finish();
+        }
+    }
+}
+
+/// The true pose the simulator starts from: the rover settled on the terrain at the start
+/// (the same rule as `Simulator::new`), or the bare start pose off the terrain.
+fn initial_truth(world: &World) -> Pose3 {
+    let geometry = VehicleGeometry::new(&world.rover);
+    let start = Pose2::new(world.start.x, world.start.y, wrap_angle(world.start.yaw));
+    rovernav_sim::vehicle::settle(&world.terrain.dem, &geometry, start)
+        .map_or(Pose3 { x: start.x, y: start.y, yaw: start.yaw, ..Default::default() }, |c| c.pose)
+}
+
+impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
+    fn on_start(
+        &mut self,
+        world: &World,
+        settings: &RunSettings,
+        frame: &SensorFrame,
+        estimate: &PoseEstimate,
+    ) {
+        let t = self.stamp(frame.t);
+        self.put(topics::WORLD, t, &WorldMsg::of(world));
+        self.put(topics::SETTINGS, t, &SettingsMsg::of(settings));
+        self.put(topics::SENSOR_FRAME, t, &SensorFrameMsg::of(0, frame));
+        self.put(topics::ESTIMATE, t, &EstimateMsg::of(0, frame.t, estimate));
+        let truth = TruthMsg {
+            simulation_truth: true,
+            cycle: 0,
+            sim_time_s: frame.t,
+            pose: (&initial_truth(world)).into(),
+            hazard_contacts: 0,
+        };
+        self.put(topics::TRUTH, t, &truth);
+        self.end_cycle(0, frame.t, t);
+        // The world is the largest message and everything replay needs: get it to disk now.
+        lock(&self.shared).apply(|w| w.flush());
+    }
+
+    fn on_cycle(&mut self, r: &CycleRecord<'_>) {
+        let t = self.stamp(r.sim_time_s);
+        self.put(topics::COMMAND, t, &CommandMsg::of(r.cycle, r.sim_time_s, r.command));
+        self.put(topics::SENSOR_FRAME, t, &SensorFrameMsg::of(r.cycle, r.frame));
+        self.put(topics::ESTIMATE, t, &EstimateMsg::of(r.cycle, r.sim_time_s, r.estimate));
+        let truth = TruthMsg {
+            simulation_truth: true,
+            cycle: r.cycle,
+            sim_time_s: r.sim_time_s,
+            pose: r.truth.into(),
+            hazard_contacts: r.hazard_contacts,
+        };
+        self.put(topics::TRUTH, t, &truth);
+        self.put_plan(r.cycle, r.sim_time_s, t, r.plan);
+        // The loop's rule for a report's hazard event: the count went up this cycle.
+        if r.hazard_contacts > self.last_hazards {
+            self.last_hazards = r.hazard_contacts;
+            let contact = HazardContactMsg {
+                simulation_truth: true,
+                cycle: r.cycle,
+                sim_time_s: r.sim_time_s,
+                x: r.truth.x,
+                y: r.truth.y,
+                contacts: r.hazard_contacts,
+                cause: r.frame.motion_stopped.clone().unwrap_or_default(),
+            };
+            self.put(topics::HAZARD_CONTACTS, t, &contact);
+        }
+        self.end_cycle(r.cycle, r.sim_time_s, t);
+        lock(&self.shared).apply(|w| w.maybe_flush().map(|_| ()));
+    }
+
+    fn on_finish(&mut self, report: &Report, trace: &Trace) {
+        let t = self.stamp(report.sim_time_s);
+        // The plan of the finishing step is announced without a cycle of its own.
+        let unlogged: Vec<Vec<Point2>> = trace.plans.iter().skip(self.plans_logged).cloned().collect();
+        for plan in unlogged {
+            self.put_plan(report.cycles, report.sim_time_s, t, &plan);
+        }
+        self.put(topics::OVERLAYS, t, &OverlaysMsg::of(report.sim_time_s, &trace.overlays));
+        self.put(topics::REPORT, t, report);
+        lock(&self.shared).apply(|w| w.flush());
+    }
+}
