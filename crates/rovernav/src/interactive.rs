@@ -95,12 +95,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         mission.name
     );
     let mut link = StdinLink::spawn();
-    let mut telemetry = rovernav_telemetry::TelemetryRecorder::create(&out_dir.join("telemetry.mcap"))?;
+    let mut log = crate::output::RunLog::open(&out_dir)?;
     let output =
-        run_mission_with(&mission, &origin_of_navigator, &mut |_| {}, &mut telemetry, Some(&mut link));
-    let logged = telemetry.finish();
+        run_mission_with(&mission, &origin_of_navigator, &mut |_| {}, &mut log.recorder, Some(&mut link));
+    log.close(output.is_ok())?;
     let output = output?;
-    logged?;
     crate::output::write_run_outputs(&out_dir, &output)?;
     let r = &output.report;
     if args.json {

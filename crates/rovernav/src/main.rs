@@ -117,12 +117,11 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
     };
     // Every topic of the run goes to telemetry.mcap; finished even when the run fails.
-    let mut telemetry = rovernav_telemetry::TelemetryRecorder::create(&out_dir.join("telemetry.mcap"))?;
-    let output = run_mission_observed(&mission, &origin_of_navigator, &mut on_progress, &mut telemetry);
+    let mut log = output::RunLog::open(&out_dir)?;
+    let output = run_mission_observed(&mission, &origin_of_navigator, &mut on_progress, &mut log.recorder);
     bar.finish_and_clear();
-    let logged = telemetry.finish();
+    log.close(output.is_ok())?;
     let output = output?;
-    logged?;
     output::write_run_outputs(&out_dir, &output)?;
     let report = &output.report;
     if args.json {

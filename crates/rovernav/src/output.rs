@@ -4,8 +4,9 @@
 use anyhow::Context;
 use rovernav_core::Point2;
 use rovernav_executive::{Report, RunOutput, Trace, World};
+use rovernav_telemetry::TelemetryRecorder;
 use rovernav_viz::{TraverseScene, write_traverse_png};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes `path` atomically from a closure that produces the bytes.
 pub fn write_atomic(
@@ -50,4 +51,43 @@ pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) 
         keep_out: &keep_out,
     };
     write_atomic(&dir.join("traverse.png"), |b| Ok(write_traverse_png(&scene, &mut *b)?))
+}
+
+/// A run's `telemetry.mcap`, opened before the run so every cycle is logged as it happens.
+///
+/// A run that fails before logging anything (an unknown navigator, a missing DEM) leaves no
+/// output behind: the log and any folders opening it created are removed again.
+pub struct RunLog {
+    path: PathBuf,
+    created: Vec<PathBuf>,
+    /// The observer to hand to the run.
+    pub recorder: TelemetryRecorder,
+}
+
+impl RunLog {
+    /// Opens `<dir>/telemetry.mcap`, creating `dir` if needed.
+    pub fn open(dir: &Path) -> anyhow::Result<Self> {
+        let created: Vec<PathBuf> = dir
+            .ancestors()
+            .filter(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(Path::to_path_buf)
+            .collect();
+        let path = dir.join("telemetry.mcap");
+        let recorder = TelemetryRecorder::create(&path)?;
+        Ok(Self { path, created, recorder })
+    }
+
+    /// Finishes the log; when the run failed without logging a message, removes it again.
+    pub fn close(self, run_succeeded: bool) -> anyhow::Result<()> {
+        let stats = self.recorder.finish();
+        if !run_succeeded && stats.as_ref().is_ok_and(|s| s.messages == 0) {
+            let _ = std::fs::remove_file(&self.path);
+            // Innermost first; `remove_dir` leaves any folder that is not empty.
+            for dir in &self.created {
+                let _ = std::fs::remove_dir(dir);
+            }
+        }
+        stats.with_context(|| format!("{}: telemetry log", self.path.display()))?;
+        Ok(())
+    }
 }

@@ -57,6 +57,15 @@ fn unknown_navigator_names_the_field() {
 }
 
 #[test]
+fn a_run_that_cannot_start_leaves_no_output_folder() {
+    let dir = temp_dir("no-output");
+    let out = dir.join("nested/out");
+    let (ok, err) = rovernav(&["run", "--navigator", "warp-drive", "--out", out.to_str().unwrap()]);
+    assert_one_line_error(ok, &err, &["warp-drive"]);
+    assert!(!dir.join("nested").exists(), "the telemetry log and its folders are removed again");
+}
+
+#[test]
 fn missing_dem_names_the_file_and_field() {
     let dir = temp_dir("dem");
     let text = "name = \"m\"\n[terrain]\nkind = \"dem\"\npath = \"/nonexistent/dem.tif\"\n[start]\nx = 1.0\ny = 1.0\n[goal]\nx = 5.0\ny = 5.0\n";

@@ -93,6 +93,11 @@ fn check_log_and_replay(out: &Path) -> Value {
         assert_eq!(count(t), cycles + 1, "{t}: one per cycle and one at the start");
     }
     assert_eq!(count(topics::COMMAND), cycles);
+    // Every message of the component bus, as published: a frame at the start and after each
+    // command, one platform command per cycle, the components' status.
+    assert_eq!(count("/bus/platform/frame"), cycles + 1);
+    assert_eq!(count("/bus/platform/command"), cycles);
+    assert!(count("/bus/system/status") > 0 && count("/bus/localization/estimate") > cycles);
     assert!(count(topics::PLAN) >= 1);
     assert_eq!(count(topics::HAZARD_CONTACTS), report["hazard_events"].as_array().unwrap().len() as u64);
     for t in [topics::WORLD, topics::SETTINGS, topics::OVERLAYS, topics::REPORT] {

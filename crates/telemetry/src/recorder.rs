@@ -5,6 +5,7 @@ use crate::messages::{
     TruthMsg, WorldMsg, report_schema, topics,
 };
 use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
+use rovernav_bus::Record;
 use rovernav_core::{Point2, Pose2, Pose3, PoseEstimate, SensorFrame, wrap_angle};
 use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
 use rovernav_sim::VehicleGeometry;
@@ -17,6 +18,10 @@ use std::path::Path;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError, mpsc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+
+/// Prefix under which every message of the component bus is logged as published (`/bus/platform/frame`),
+/// beside the curated topics above that replay reads.
+pub const BUS_PREFIX: &str = "/bus";
 
 /// Every topic with its schema name, schema and whether it carries simulation truth.
 pub fn topic_table() -> Vec<(&'static str, &'static str, Value, bool)> {
@@ -246,6 +251,27 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
         }
         self.end_cycle(r.cycle, r.sim_time_s, t);
         lock(&self.shared).apply(|w| w.maybe_flush().map(|_| ()));
+    }
+
+    fn wants_bus(&self) -> bool {
+        true
+    }
+
+    fn on_bus(&mut self, records: &[Record]) {
+        for record in records {
+            let topic = format!("{BUS_PREFIX}{}", record.topic);
+            let t = self.stamp(record.time_s);
+            lock(&self.shared).apply(|w| {
+                if !w.has_topic(&topic) {
+                    // Bus messages are serde mirrors of the core types; their schema is the
+                    // type's name, the payload plain JSON.
+                    let metadata = BTreeMap::from([("bus_topic".to_string(), record.topic.clone())]);
+                    let name = if record.type_name.is_empty() { "json" } else { &record.type_name };
+                    w.add_topic(&topic, name, &serde_json::json!({}), &metadata)?;
+                }
+                w.write_json(&topic, t, &record.payload)
+            });
+        }
     }
 
     fn on_finish(&mut self, report: &Report, trace: &Trace) {

@@ -180,6 +180,16 @@ impl<W: Write + Seek> TelemetryWriter<W> {
         message: &T,
     ) -> Result<(), TelemetryError> {
         let data = serde_json::to_vec(message).map_err(|e| self.topic_err(topic, &e.to_string()))?;
+        self.write_json(topic, time_ns, &data)
+    }
+
+    /// Whether a topic has been declared.
+    pub fn has_topic(&self, topic: &str) -> bool {
+        self.channels.contains_key(topic)
+    }
+
+    /// Logs a message that is already JSON (a bus record) on a declared topic.
+    pub fn write_json(&mut self, topic: &str, time_ns: u64, data: &[u8]) -> Result<(), TelemetryError> {
         let Some(channel) = self.channels.get_mut(topic) else {
             return Err(self.topic_err(topic, "not declared"));
         };
@@ -190,7 +200,7 @@ impl<W: Write + Seek> TelemetryWriter<W> {
             log_time: time_ns,
             publish_time: time_ns,
         };
-        self.writer.write_to_known_channel(&header, &data).map_err(self.mcap_err())?;
+        self.writer.write_to_known_channel(&header, data).map_err(self.mcap_err())?;
         self.chunk_bytes += data.len() as u64;
         self.stats.messages += 1;
         self.stats.message_bytes += data.len() as u64;
