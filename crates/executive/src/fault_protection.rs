@@ -25,6 +25,8 @@ pub enum FaultKind {
     LocalizationFailure,
     /// The rover does not get closer to where it is driving.
     NoProgress,
+    /// The body keeps meeting the terrain (the navigator drives into what it does not see).
+    HazardContact,
     /// Any other component failed.
     ComponentFailure,
 }
@@ -37,6 +39,7 @@ impl FaultKind {
             FaultKind::StuckWheel => "stuck_wheel",
             FaultKind::LocalizationFailure => "localization_failure",
             FaultKind::NoProgress => "no_progress",
+            FaultKind::HazardContact => "hazard_contact",
             FaultKind::ComponentFailure => "component_failure",
         }
     }
@@ -92,6 +95,7 @@ impl FaultProtection {
         match component {
             "range-sensors" | "inertial-sensors" => FaultKind::SensorFault,
             "wheel-odometry" => FaultKind::StuckWheel,
+            "contact-monitor" => FaultKind::HazardContact,
             "pose-estimator" => FaultKind::LocalizationFailure,
             _ => FaultKind::ComponentFailure,
         }

@@ -67,7 +67,8 @@ pub struct ComponentReport {
 /// The fault that stopped the mission.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct FaultReport {
-    /// `sensor_fault` | `stuck_wheel` | `localization_failure` | `no_progress` | `component_failure`.
+    /// `sensor_fault` | `stuck_wheel` | `localization_failure` | `no_progress` | `hazard_contact` |
+    /// `component_failure`.
     pub kind: String,
     /// The component that reported it, if one did.
     pub component: Option<String>,

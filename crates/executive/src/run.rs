@@ -17,7 +17,9 @@ use crate::platform::{ArmConfig, ScheduledFault, SimPlatform, ToolingArm};
 use crate::reflexive::{MotionController, NavigatorComponent, PoseEstimatorComponent, PoseEstimatorConfig};
 use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
 use crate::runtime::{Runtime, RuntimeError};
-use crate::sensor_servers::{InertialSensors, RangeSensors, WheelOdometry};
+use crate::sensor_servers::{
+    ContactMonitor, InertialSensors, MAX_BODY_CONTACTS, RangeSensors, WheelOdometry,
+};
 use crate::world::{World, WorldError, build_world};
 use rovernav_bus::{Bus, BusError, InProcessTransport, Record, Subscriber};
 use rovernav_core::{
@@ -319,6 +321,7 @@ pub fn run_world_with(
     runtime.add(Box::new(RangeSensors::new()))?;
     runtime.add(Box::new(InertialSensors::new()))?;
     runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
+    runtime.add(Box::new(ContactMonitor::new(MAX_BODY_CONTACTS)))?;
     runtime.add(Box::new(PoseEstimatorComponent::new(localizer, options.pose_estimator.clone())))?;
     let mut external = Deliberative::ports();
     external.push(Port::of(topics::OPERATOR_COMMAND));

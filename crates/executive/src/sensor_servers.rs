@@ -253,6 +253,61 @@ impl Component for WheelOdometry {
     }
 }
 
+/// Body contacts the platform may report in one run before fault protection stops the rover.
+/// A navigator that meets the terrain backs away and looks again (the first contact) and may
+/// try once more; a third contact means it keeps driving into what it cannot see.
+pub const MAX_BODY_CONTACTS: u32 = 3;
+
+/// The body-contact monitor (belly and tilt switches, the hazard sensors of paper 001): counts
+/// motions the platform stopped because the body met the terrain, and fails when a navigator
+/// keeps running into it, so that fault protection halts the rover instead of letting it ram
+/// the same rock again and again.
+pub struct ContactMonitor {
+    frames: Option<Subscriber<FrameMsg>>,
+    contacts: u32,
+    limit: u32,
+}
+
+impl ContactMonitor {
+    /// A monitor that fails at the `limit`-th body contact.
+    pub fn new(limit: u32) -> Self {
+        Self { frames: None, contacts: 0, limit: limit.max(1) }
+    }
+
+    fn check(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        for f in frames(ctx, &self.frames)? {
+            let Some(why) = f.motion_stopped.as_deref().filter(|w| w.starts_with("hazard")) else { continue };
+            self.contacts += 1;
+            if self.contacts >= self.limit {
+                return Err(ComponentFault(format!(
+                    "body contact: the motion stopped on the terrain {} times (last: `{why}`)",
+                    self.contacts
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Component for ContactMonitor {
+    fn name(&self) -> &'static str {
+        "contact-monitor"
+    }
+    fn ports(&self) -> Ports {
+        Ports { inputs: vec![Port::of(topics::PLATFORM_FRAME)], outputs: vec![] }
+    }
+    fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        self.frames = Some(bus.subscribe(topics::PLATFORM_FRAME)?);
+        Ok(())
+    }
+    fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        self.check(ctx)
+    }
+    fn idle(&mut self, ctx: &mut Ctx<'_>, _state: JausState) -> Result<(), ComponentFault> {
+        self.check(ctx)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -300,6 +355,23 @@ mod tests {
 
     fn sense(seq: u64, clouds: Vec<CloudMsg>) -> FrameMsg {
         FrameMsg { clouds, ..frame(seq, Some(CommandMsg::Sense { requests: vec![] })) }
+    }
+
+    #[test]
+    fn the_contact_monitor_fails_at_the_limit_and_ignores_other_stops() {
+        let stopped = |seq: u64, why: &str| FrameMsg {
+            motion_stopped: Some(why.into()),
+            ..frame(seq, Some(CommandMsg::Turn { angle: 0.1 }))
+        };
+        let two = vec![
+            stopped(1, "hazard: belly contact, terrain 0.190 m above the wheel plane"),
+            stopped(2, "proximity: middle"),
+            stopped(3, "hazard: tilt 27.0 deg"),
+        ];
+        assert_eq!(feed(&mut ContactMonitor::new(3), two.clone()), None, "two contacts are allowed");
+        let third = two.into_iter().chain([stopped(4, "hazard: belly contact")]).collect();
+        let why = feed(&mut ContactMonitor::new(3), third).expect("the third contact fails");
+        assert!(why.contains("3 times") && why.contains("belly contact"), "{why}");
     }
 
     #[test]

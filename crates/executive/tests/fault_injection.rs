@@ -138,3 +138,43 @@ fn a_compass_reading_nan_stops_the_rover_with_a_sensor_fault() {
     assert!(log.frames[..log.frames.len() - 1].iter().all(|f| !has_nan(f)));
     assert!(log.frames.last().unwrap().t >= 30.0);
 }
+
+/// Campaign `full`, trial 5: SR2 drove into a tilt hazard and kept commanding the same motion,
+/// logging 4995 hazard contacts before its cycle budget ran out. The contact monitor now stops
+/// it at the third contact, judged from the platform's motion-stop reports alone.
+#[test]
+fn regression_sr2_rammed_the_terrain_4995_times_in_campaign_full_trial_5() {
+    let text = r#"
+name = "full-trial-0005"
+seed = 443230342
+navigator = "sr2"
+[terrain]
+kind = "procedural"
+size_m = 30.0
+resolution_m = 0.05
+rock_abundance = 0.04
+relief_m = 0.3254641454057985
+slope_deg = 2.26523504172323
+[start]
+x = 5.0
+y = 5.0
+yaw_deg = 30.0
+[goal]
+x = 20.0
+y = 20.0
+"#;
+    let mission = Mission::from_toml(text, "trial-5").expect("valid mission");
+    let mut log = Log::default();
+    let r = run_mission_observed(&mission, "trial-5", &mut |_| {}, &mut log).expect("runs").report;
+    assert_eq!(r.outcome, "help_requested", "{}", r.message);
+    assert_eq!(r.hazard_contacts, 3, "stopped at the third contact: {}", r.message);
+    let fault = r.fault.as_ref().expect("a diagnosed fault");
+    assert_eq!(
+        (fault.kind.as_str(), fault.component.as_deref()),
+        ("hazard_contact", Some("contact-monitor"))
+    );
+    // Independent of the monitor: the logged frames show three motions stopped on the terrain.
+    let stops =
+        log.frames.iter().filter(|f| f.motion_stopped.as_deref().is_some_and(|w| w.starts_with("hazard")));
+    assert_eq!(stops.count(), 3);
+}
