@@ -10,9 +10,8 @@
 //! waiting one is aborted. Banner and progress go to standard error.
 
 use crate::RunArgs;
-use rovernav_executive::{Mission, OperatorLink, run_mission_with};
+use rovernav_executive::{OperatorLink, run_mission_with};
 use std::io::{BufRead, Write};
-use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
 use std::time::Duration;
 
@@ -77,19 +76,7 @@ impl OperatorLink for StdinLink {
 
 /// Runs a mission with operator commands from standard input.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
-    let (mut mission, origin) = match &args.mission {
-        Some(path) => (Mission::from_file(path)?, path.display().to_string()),
-        None => (Mission::default_mission(), "built-in default mission".to_string()),
-    };
-    let mut origin_of_navigator = origin.clone();
-    if let Some(seed) = args.seed {
-        mission.seed = seed;
-    }
-    if let Some(nav) = &args.navigator {
-        mission.navigator = nav.clone();
-        origin_of_navigator = "--navigator".into();
-    }
-    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
+    let crate::MissionToRun { mission, origin_of_navigator, out_dir } = crate::MissionToRun::of(&args)?;
     eprintln!(
         "rovernav: mission `{}` running with operator input; `help` lists the commands, `mission pause` holds the rover",
         mission.name

@@ -69,6 +69,33 @@ struct RunArgs {
     interactive: bool,
 }
 
+/// The mission a `rovernav run` names, with its command-line overrides applied.
+struct MissionToRun {
+    mission: Mission,
+    /// Where the navigator's name came from, for error messages.
+    origin_of_navigator: String,
+    out_dir: PathBuf,
+}
+
+impl MissionToRun {
+    fn of(args: &RunArgs) -> anyhow::Result<Self> {
+        let (mut mission, origin) = match &args.mission {
+            Some(path) => (Mission::from_file(path)?, path.display().to_string()),
+            None => (Mission::default_mission(), "built-in default mission".to_string()),
+        };
+        let mut origin_of_navigator = origin.clone();
+        if let Some(seed) = args.seed {
+            mission.seed = seed;
+        }
+        if let Some(nav) = &args.navigator {
+            mission.navigator = nav.clone();
+            origin_of_navigator = "--navigator".into();
+        }
+        let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
+        Ok(Self { mission, origin_of_navigator, out_dir })
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -91,19 +118,7 @@ fn main() -> ExitCode {
 }
 
 fn run(args: RunArgs) -> anyhow::Result<()> {
-    let (mut mission, origin) = match &args.mission {
-        Some(path) => (Mission::from_file(path)?, path.display().to_string()),
-        None => (Mission::default_mission(), "built-in default mission".to_string()),
-    };
-    let mut origin_of_navigator = origin.clone();
-    if let Some(seed) = args.seed {
-        mission.seed = seed;
-    }
-    if let Some(nav) = &args.navigator {
-        mission.navigator = nav.clone();
-        origin_of_navigator = "--navigator".into();
-    }
-    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
+    let MissionToRun { mission, origin_of_navigator, out_dir } = MissionToRun::of(&args)?;
 
     let bar = ProgressBar::new(1000);
     bar.set_style(
