@@ -17,6 +17,7 @@ pub mod mission;
 pub mod operator;
 pub mod platform;
 pub mod reflexive;
+pub mod remote;
 pub mod report;
 pub mod run;
 pub mod runtime;

@@ -313,16 +313,8 @@ pub fn run_world_with(
         BusKind::Serialized => Bus::over(Box::new(InProcessTransport::new())),
     };
     let mut runtime = Runtime::new(bus)?;
-    let rover = &world.rover;
-    runtime.add(Box::new(NavigatorComponent::new(navigator, &mission.navigator, rover.clone())))?;
-    runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
-    runtime.add(Box::new(MotionController::new()))?;
-    runtime.add(Box::new(SimPlatform::new(sim, options.faults.clone())))?;
-    runtime.add(Box::new(RangeSensors::new()))?;
-    runtime.add(Box::new(InertialSensors::new()))?;
-    runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
-    runtime.add(Box::new(ContactMonitor::new(MAX_BODY_CONTACTS)))?;
-    runtime.add(Box::new(PoseEstimatorComponent::new(localizer, options.pose_estimator.clone())))?;
+    let sim_platform = Box::new(SimPlatform::new(sim, options.faults.clone()));
+    add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, sim_platform)?;
     let mut external = Deliberative::ports();
     external.push(Port::of(topics::OPERATOR_COMMAND));
     runtime.validate(&external)?;
@@ -491,6 +483,29 @@ pub fn run_world_with(
     };
     observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
+}
+
+/// Adds a run's components in stepping order around a platform (the simulator in process, or
+/// its stand-in across a link): one list, so a remote run steps exactly as a local one.
+pub(crate) fn add_components(
+    runtime: &mut Runtime,
+    navigator: Box<dyn Navigator>,
+    localizer: Box<dyn rovernav_core::Localizer>,
+    mission: &RunSettings,
+    rover: &rovernav_core::RoverConfig,
+    options: &RunOptions,
+    platform: Box<dyn crate::components::Component>,
+) -> Result<(), RuntimeError> {
+    runtime.add(Box::new(NavigatorComponent::new(navigator, &mission.navigator, rover.clone())))?;
+    runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
+    runtime.add(Box::new(MotionController::new()))?;
+    runtime.add(platform)?;
+    runtime.add(Box::new(RangeSensors::new()))?;
+    runtime.add(Box::new(InertialSensors::new()))?;
+    runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
+    runtime.add(Box::new(ContactMonitor::new(MAX_BODY_CONTACTS)))?;
+    runtime.add(Box::new(PoseEstimatorComponent::new(localizer, options.pose_estimator.clone())))?;
+    Ok(())
 }
 
 /// Hands the deliberative layer's answers to the operator.

@@ -2,6 +2,7 @@
 
 mod bench;
 mod campaign;
+mod distributed;
 mod eval_localization;
 mod eval_terrain;
 mod interactive;
@@ -36,6 +37,12 @@ enum Command {
     Eval(EvalCommand),
     /// Campaigns: every navigator on the same generated terrains, with a results table and plots.
     Campaign(campaign::CampaignArgs),
+    /// The simulator as its own process, serving a rover over zenoh (feature `zenoh`).
+    Sim(distributed::SimArgs),
+    /// The autonomy as its own process, driving a simulator over zenoh (feature `zenoh`).
+    Rover(distributed::RoverArgs),
+    /// Send one operator command to a running `rovernav rover` over zenoh (feature `zenoh`).
+    Send(distributed::SendArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -107,6 +114,9 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
         Some(Command::Campaign(args)) => campaign::run(args),
+        Some(Command::Sim(args)) => distributed::sim(args),
+        Some(Command::Rover(args)) => distributed::rover(args),
+        Some(Command::Send(args)) => distributed::send(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

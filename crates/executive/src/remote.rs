@@ -1,0 +1,676 @@
+//! The platform across a link: the simulator in one process, the autonomy in another.
+//!
+//! The rover process hosts [`RemotePlatform`] where a single-process run hosts
+//! [`SimPlatform`]: the same name, ports and JAUS life. Each time the runtime runs it, it takes
+//! the motion requests and holds queued for the platform, sends them with the call (initialize,
+//! step or idle, at the runtime's time) over a [`PlatformLink`], and publishes on its local bus
+//! the frames and task statuses that came back, in the order the simulator published them.
+//!
+//! The simulator process answers with a [`PlatformServer`]: a real [`SimPlatform`] (with the
+//! mission's scheduled faults) on a private in-process bus, driven call for call as the rover
+//! process's runtime drives its stand-in, so a two-process run is the single-process run exactly
+//! (messages cross as JSON, whose floats round-trip bit for bit).
+//!
+//! Truth stays with the server. The rover process learns the simulated clock (which the
+//! platform's frames carry anyway) and, once the mission has ended, the scoring: the rover sends
+//! [`PlatformCall::Finish`] with the goal the mission ended with and its final estimate; the
+//! server answers with a [`Scoring`] computed from truth (goal and localisation errors, distance
+//! driven, hazard contacts and events, optimal length, the true track and sensed cells for the
+//! picture), which [`run_remote`] merges with what the rover side knows (outcome, cycles,
+//! components, tasks, fault) into the usual [`Report`].
+//!
+//! The link is transport-agnostic: the CLI fills it with zenoh (`rovernav sim` / `rovernav
+//! rover`); [`LocalLink`] fills it in process, through JSON, for tests.
+
+use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
+use crate::deliberative::{Deliberative, DeliberativeConfig};
+use crate::messages::{ControlAction, FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
+use crate::operator::OperatorLink;
+use crate::platform::{ScheduledFault, SimPlatform};
+use crate::reflexive::{NavigatorComponent, PoseEstimatorComponent};
+use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
+use crate::run::{Progress, RunError, RunOptions, RunOutput, RunSettings, Trace};
+use crate::runtime::Runtime;
+use crate::world::World;
+use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
+use rovernav_core::{Grid2, GridGeometry, Navigator, Point2, Pose3};
+use rovernav_sim::Simulator;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The rover process's platform requests (what crosses the network, not the rover's local bus).
+pub const PLATFORM_REQUEST: Topic<PlatformRequest> = Topic::new("/platform/request");
+/// The simulator process's answers.
+pub const PLATFORM_REPLY: Topic<PlatformReply> = Topic::new("/platform/reply");
+
+/// What the runtime asked of the platform.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlatformCall {
+    /// Initialization; names the mission and seed so that mismatched processes are refused.
+    Initialize {
+        /// Mission name.
+        mission: String,
+        /// Seed of the rover process.
+        seed: u64,
+    },
+    /// One step while Ready.
+    Step,
+    /// One cycle while Standby or Emergency.
+    Idle(JausState),
+    /// The mission has ended: score it against truth.
+    Finish {
+        /// The goal the mission ended with (an operator may have moved it) [x, y] (m).
+        goal: [f64; 2],
+        /// The rover's final pose estimate.
+        estimate: PoseMsg,
+    },
+}
+
+/// One call of the platform with the inputs queued for it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlatformRequest {
+    /// Request number (1 for the first); the reply repeats it.
+    pub seq: u64,
+    /// The runtime's time for the call (s).
+    pub time_s: f64,
+    /// The call.
+    pub call: PlatformCall,
+    /// Motion requests queued on `/platform/command`, oldest first.
+    pub commands: Vec<MotionRequest>,
+    /// Holds queued on `/platform/hold`, oldest first.
+    pub holds: Vec<HoldMsg>,
+}
+
+/// A message the platform published during a call.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlatformOutput {
+    /// On `/platform/frame`.
+    Frame(FrameMsg),
+    /// On `/executive/task_status`.
+    Status(TaskStatusMsg),
+}
+
+/// The answer to one [`PlatformRequest`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlatformReply {
+    /// The request's number.
+    pub seq: u64,
+    /// The simulated clock after the call (s).
+    pub sim_time_s: f64,
+    /// What the platform published, in publish order.
+    pub outputs: Vec<PlatformOutput>,
+    /// The platform's fault, if the call raised one (the component then goes to Failure).
+    pub fault: Option<String>,
+    /// The scoring, in answer to [`PlatformCall::Finish`].
+    pub scoring: Option<Scoring>,
+}
+
+/// The figures of a run that need simulator truth, computed by the simulator process.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scoring {
+    /// True final position to the final goal (m).
+    pub goal_error_m: f64,
+    /// True path length driven (m).
+    pub distance_driven_m: f64,
+    /// Shortest safe path with full knowledge of the terrain (m).
+    pub optimal_length_m: Option<f64>,
+    /// Times the true rover entered a hazard.
+    pub hazard_contacts: u32,
+    /// Simulated mission time (s).
+    pub sim_time_s: f64,
+    /// Range images taken.
+    pub sensing_actions: u64,
+    /// Final |estimate - truth| in the plane (m).
+    pub localization_error_m: f64,
+    /// Start to final goal (m).
+    pub straight_line_m: f64,
+    /// Where and why the true rover met a hazard.
+    pub hazard_events: Vec<HazardEvent>,
+    /// Commands the simulator executed (the rover side's cycle count must agree).
+    pub cycles: u64,
+    /// True pose at the start and after every command (for the picture only).
+    pub truth: Vec<PoseMsg>,
+    /// Cells of the sensed-area grid covered by range data, as `[col, row]` (picture only).
+    pub sensed: Vec<[u32; 2]>,
+}
+
+/// Why a link exchange failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("platform link: {0}")]
+pub struct LinkError(pub String);
+
+impl From<BusError> for LinkError {
+    fn from(e: BusError) -> Self {
+        LinkError(e.to_string())
+    }
+}
+
+/// The rover process's end of the link: sends a request and blocks for its reply.
+pub trait PlatformLink: Send {
+    /// One request and its reply.
+    fn exchange(&mut self, request: &PlatformRequest) -> Result<PlatformReply, LinkError>;
+}
+
+/// The grid of cells the range data covered, at the DEM's resolution (at least 0.1 m).
+pub fn sensed_grid(world: &World) -> Grid2<bool> {
+    let dem_geometry = *world.terrain.dem.geometry();
+    let res = dem_geometry.resolution.max(0.1);
+    let geometry = GridGeometry {
+        cols: (dem_geometry.width_m() / res).ceil() as usize,
+        rows: (dem_geometry.height_m() / res).ceil() as usize,
+        resolution: res,
+        ..dem_geometry
+    };
+    Grid2::filled(geometry, false)
+}
+
+/// The simulator process's side: a [`SimPlatform`] on a private bus, answering requests.
+pub struct PlatformServer {
+    world: World,
+    mission: String,
+    seed: u64,
+    bus: Bus,
+    platform: SimPlatform,
+    tap: TapId,
+    truth: Vec<PoseMsg>,
+    sensed: Grid2<bool>,
+    hazard_events: Vec<HazardEvent>,
+    last_hazards: u32,
+    cycles: u64,
+    finished: bool,
+}
+
+impl PlatformServer {
+    /// A server for a mission's world, seed and scheduled faults.
+    pub fn new(
+        world: World,
+        mission: &str,
+        seed: u64,
+        faults: Vec<ScheduledFault>,
+    ) -> Result<Self, BusError> {
+        let sim = Simulator::new(
+            world.terrain.clone(),
+            world.rover.clone(),
+            world.sensor_model.clone(),
+            world.start,
+            seed,
+        );
+        let mut platform = SimPlatform::new(sim, faults);
+        let mut bus = Bus::in_process();
+        platform.connect(&mut bus)?;
+        let tap = bus.tap()?;
+        let truth = vec![platform.sim().truth().into()];
+        let sensed = sensed_grid(&world);
+        Ok(Self {
+            world,
+            mission: mission.to_string(),
+            seed,
+            bus,
+            platform,
+            tap,
+            truth,
+            sensed,
+            hazard_events: Vec::new(),
+            last_hazards: 0,
+            cycles: 0,
+            finished: false,
+        })
+    }
+
+    /// Whether a [`PlatformCall::Finish`] has been answered (the serving loop may stop).
+    pub fn finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Commands executed so far.
+    pub fn cycles(&self) -> u64 {
+        self.cycles
+    }
+
+    /// The simulator (truth: for the simulator process's own log lines).
+    pub fn sim(&self) -> &Simulator {
+        self.platform.sim()
+    }
+
+    /// Answers one request: the call runs on the simulator exactly as in a single-process run.
+    pub fn handle(&mut self, request: &PlatformRequest) -> PlatformReply {
+        let mut reply = PlatformReply {
+            seq: request.seq,
+            sim_time_s: self.platform.sim().time(),
+            outputs: Vec::new(),
+            fault: None,
+            scoring: None,
+        };
+        if let PlatformCall::Finish { goal, estimate } = &request.call {
+            reply.scoring = Some(self.score(Point2::new(goal[0], goal[1]), Pose3::from(*estimate)));
+            self.finished = true;
+            return reply;
+        }
+        match self.call(request) {
+            Ok(outputs) => reply.outputs = outputs,
+            Err(ComponentFault(why)) => reply.fault = Some(why),
+        }
+        reply.sim_time_s = self.platform.sim().time();
+        reply
+    }
+
+    fn call(&mut self, request: &PlatformRequest) -> Result<Vec<PlatformOutput>, ComponentFault> {
+        for c in &request.commands {
+            self.bus.publish(topics::PLATFORM_COMMAND, c.clone())?;
+        }
+        for h in &request.holds {
+            self.bus.publish(topics::PLATFORM_HOLD, *h)?;
+        }
+        let mut ctx = Ctx { bus: &mut self.bus, time_s: request.time_s };
+        match &request.call {
+            PlatformCall::Initialize { mission, seed } => {
+                if (mission.as_str(), *seed) != (self.mission.as_str(), self.seed) {
+                    return Err(ComponentFault(format!(
+                        "the simulator runs mission `{}` with seed {}, the rover `{mission}` with seed {seed}",
+                        self.mission, self.seed
+                    )));
+                }
+                self.platform.initialize(&mut ctx)?;
+            }
+            PlatformCall::Step => self.platform.step(&mut ctx)?,
+            PlatformCall::Idle(state) => self.platform.idle(&mut ctx, *state)?,
+            PlatformCall::Finish { .. } => {}
+        }
+        for e in self.platform.take_executed() {
+            self.cycles += 1;
+            for cloud in &e.frame.clouds {
+                crate::run::mark_sensed(&mut self.sensed, &e.truth, cloud);
+            }
+            if e.hazard_contacts > self.last_hazards {
+                self.last_hazards = e.hazard_contacts;
+                self.hazard_events.push(HazardEvent {
+                    x: e.truth.x,
+                    y: e.truth.y,
+                    cycle: self.cycles,
+                    cause: e.frame.motion_stopped.clone().unwrap_or_default(),
+                });
+            }
+            self.truth.push(e.truth.into());
+        }
+        let mut outputs = Vec::new();
+        for record in self.bus.take_tap(self.tap)? {
+            if record.topic == topics::PLATFORM_FRAME.name() {
+                outputs.push(PlatformOutput::Frame(decode(&topics::PLATFORM_FRAME, &record.payload)?));
+            } else if record.topic == topics::TASK_STATUS.name() {
+                outputs.push(PlatformOutput::Status(decode(&topics::TASK_STATUS, &record.payload)?));
+            }
+        }
+        Ok(outputs)
+    }
+
+    fn score(&mut self, goal: Point2, estimate: Pose3) -> Scoring {
+        self.world.goal.position = goal;
+        let world = &self.world;
+        let sim = self.platform.sim();
+        let truth = sim.truth();
+        let mut sensed = Vec::new();
+        let g = self.sensed.geometry;
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                if *self.sensed.get(c, r) {
+                    sensed.push([c as u32, r as u32]);
+                }
+            }
+        }
+        Scoring {
+            goal_error_m: Point2::new(truth.x, truth.y).dist(goal),
+            distance_driven_m: sim.distance_driven(),
+            optimal_length_m: crate::world::optimal_length(world),
+            hazard_contacts: sim.hazard_contacts(),
+            sim_time_s: sim.time(),
+            sensing_actions: sim.sensing_actions(),
+            localization_error_m: (truth.x - estimate.x).hypot(truth.y - estimate.y),
+            straight_line_m: world.start.position().dist(goal),
+            hazard_events: self.hazard_events.clone(),
+            cycles: self.cycles,
+            truth: self.truth.clone(),
+            sensed,
+        }
+    }
+}
+
+/// A link to a server in the same process, through JSON as a network link would carry it.
+pub struct LocalLink {
+    server: PlatformServer,
+}
+
+impl LocalLink {
+    /// Wraps a server.
+    pub fn new(server: PlatformServer) -> Self {
+        Self { server }
+    }
+}
+
+impl PlatformLink for LocalLink {
+    fn exchange(&mut self, request: &PlatformRequest) -> Result<PlatformReply, LinkError> {
+        let request = decode(&PLATFORM_REQUEST, &encode(&PLATFORM_REQUEST, request)?)?;
+        let reply = self.server.handle(&request);
+        Ok(decode(&PLATFORM_REPLY, &encode(&PLATFORM_REPLY, &reply)?)?)
+    }
+}
+
+/// The platform's stand-in in the rover process: forwards every call over a [`PlatformLink`].
+pub struct RemotePlatform {
+    link: Box<dyn PlatformLink>,
+    mission: String,
+    seed: u64,
+    commands: Option<Subscriber<MotionRequest>>,
+    holds: Option<Subscriber<HoldMsg>>,
+    seq: u64,
+    sim_time_s: f64,
+    initialized: bool,
+    executed: Vec<FrameMsg>,
+}
+
+impl RemotePlatform {
+    /// A stand-in for the platform of a mission (name and seed are checked by the server).
+    pub fn new(link: Box<dyn PlatformLink>, mission: &str, seed: u64) -> Self {
+        Self {
+            link,
+            mission: mission.to_string(),
+            seed,
+            commands: None,
+            holds: None,
+            seq: 0,
+            sim_time_s: 0.0,
+            initialized: false,
+            executed: Vec::new(),
+        }
+    }
+
+    /// The simulated clock as of the last reply (s).
+    pub fn sim_time(&self) -> f64 {
+        self.sim_time_s
+    }
+
+    /// Takes the frames of the commands executed since the last call, in order.
+    pub fn take_executed(&mut self) -> Vec<FrameMsg> {
+        std::mem::take(&mut self.executed)
+    }
+
+    /// Asks the server to score the ended mission.
+    pub fn finish(&mut self, goal: Point2, estimate: Pose3) -> Result<Scoring, LinkError> {
+        let call = PlatformCall::Finish { goal: [goal.x, goal.y], estimate: estimate.into() };
+        let reply = self.exchange(call, self.sim_time_s, Vec::new(), Vec::new())?;
+        reply.scoring.ok_or_else(|| LinkError("the simulator answered `finish` without a scoring".into()))
+    }
+
+    fn exchange(
+        &mut self,
+        call: PlatformCall,
+        time_s: f64,
+        commands: Vec<MotionRequest>,
+        holds: Vec<HoldMsg>,
+    ) -> Result<PlatformReply, LinkError> {
+        self.seq += 1;
+        let request = PlatformRequest { seq: self.seq, time_s, call, commands, holds };
+        let reply = self.link.exchange(&request)?;
+        if reply.seq != request.seq {
+            return Err(LinkError(format!("reply {} to request {}", reply.seq, request.seq)));
+        }
+        self.sim_time_s = reply.sim_time_s;
+        Ok(reply)
+    }
+
+    /// Forwards one call with the queued inputs and publishes what the simulator published.
+    fn forward(&mut self, ctx: &mut Ctx<'_>, call: PlatformCall) -> Result<(), ComponentFault> {
+        let commands: Vec<MotionRequest> = match &self.commands {
+            Some(s) => ctx.bus.take(s)?.iter().map(|c| (**c).clone()).collect(),
+            None => Vec::new(),
+        };
+        let holds: Vec<HoldMsg> = match &self.holds {
+            Some(s) => ctx.bus.take(s)?.iter().map(|h| **h).collect(),
+            None => Vec::new(),
+        };
+        // With nothing queued and the clock not past the simulator's, the platform would do
+        // nothing (no hold, no command): spare the round trip.
+        let nothing_to_do = commands.is_empty() && holds.is_empty() && ctx.time_s <= self.sim_time_s;
+        if self.initialized && !matches!(call, PlatformCall::Initialize { .. }) && nothing_to_do {
+            return Ok(());
+        }
+        let reply =
+            self.exchange(call, ctx.time_s, commands, holds).map_err(|e| ComponentFault(e.to_string()))?;
+        for output in reply.outputs {
+            match output {
+                PlatformOutput::Frame(frame) => {
+                    if frame.request().is_some() {
+                        self.executed.push(frame.clone());
+                    }
+                    ctx.bus.publish(topics::PLATFORM_FRAME, frame)?;
+                }
+                PlatformOutput::Status(status) => ctx.bus.publish(topics::TASK_STATUS, status)?,
+            }
+        }
+        match reply.fault {
+            Some(why) => Err(ComponentFault(why)),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Component for RemotePlatform {
+    /// The platform's name, so reports and fault protection see the same component.
+    fn name(&self) -> &'static str {
+        "platform"
+    }
+
+    fn ports(&self) -> Ports {
+        Ports {
+            inputs: vec![Port::of(topics::PLATFORM_COMMAND), Port::of(topics::PLATFORM_HOLD)],
+            outputs: vec![Port::of(topics::PLATFORM_FRAME), Port::of(topics::TASK_STATUS)],
+        }
+    }
+
+    fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        self.commands = Some(bus.subscribe(topics::PLATFORM_COMMAND)?);
+        self.holds = Some(bus.subscribe(topics::PLATFORM_HOLD)?);
+        Ok(())
+    }
+
+    fn initialize(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        let call = PlatformCall::Initialize { mission: self.mission.clone(), seed: self.seed };
+        self.forward(ctx, call)?;
+        self.initialized = true;
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
+        self.forward(ctx, PlatformCall::Step)
+    }
+
+    fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
+        self.forward(ctx, PlatformCall::Idle(state))
+    }
+}
+
+/// Runs the autonomy of a mission against a platform across `link`: the rover process's half of
+/// a two-process run. `world` gives the rover's configuration, start, goal and keep-out zones
+/// (its terrain is not given to any component; the picture uses it after the run); scheduled
+/// faults are the simulator process's business. The report equals the single-process run's,
+/// wall-clock figures aside.
+pub fn run_remote(
+    mut world: World,
+    mission: &RunSettings,
+    options: &RunOptions,
+    origin: &str,
+    link: Box<dyn PlatformLink>,
+    on_progress: &mut dyn FnMut(&Progress),
+    mut operator: Option<&mut dyn OperatorLink>,
+) -> Result<RunOutput, RunError> {
+    let wall = Instant::now();
+    let navigator: Box<dyn Navigator> =
+        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
+            RunError::UnknownNavigator {
+                origin: origin.into(),
+                name: mission.navigator.clone(),
+                known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
+            }
+        })?;
+    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
+    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
+        .ok_or_else(|| RunError::UnknownLocalizer {
+            origin: origin.into(),
+            name: mission.localizer.clone(),
+            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
+        })?;
+
+    let mut runtime = Runtime::new(Bus::in_process())?;
+    let platform = Box::new(RemotePlatform::new(link, &mission.name, mission.seed));
+    crate::run::add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, platform)?;
+    let mut external = Deliberative::ports();
+    external.push(Port::of(topics::OPERATOR_COMMAND));
+    runtime.validate(&external)?;
+    let config = DeliberativeConfig {
+        time_limit_s: mission.time_limit_s,
+        max_cycles: mission.max_cycles,
+        keep_out: world.goal.keep_out.clone(),
+        tolerance: world.goal.tolerance,
+        mast_range_m: world.rover.mast_range,
+        fault_protection: options.fault_protection.clone(),
+    };
+    let mut deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
+    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
+    runtime.initialize(0.0)?;
+
+    let mut trace = Trace::default();
+    trace.estimate.push(estimator(&runtime).estimate().pose);
+    runtime.command(None, ControlAction::Resume)?;
+    runtime.settle(runtime.clock())?;
+
+    let mut cycles = 0u64;
+    let (outcome, message) = loop {
+        let now = remote(&runtime).sim_time();
+        if let Some(link) = operator.as_deref_mut() {
+            for line in link.poll(cycles, deliberative.waiting()) {
+                runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
+            }
+            if link.closed() {
+                deliberative.close_input();
+            }
+        }
+        deliberative.step(runtime.bus())?;
+        crate::run::forward_replies(runtime.bus(), &replies, operator.as_deref_mut())?;
+        if let Some((outcome, message)) = deliberative.end() {
+            break (*outcome, message.clone());
+        }
+        runtime.tick(now)?;
+        let executed = remote_mut(&mut runtime).take_executed();
+        let plan = navigator_of(&runtime).planned_path();
+        if !plan.is_empty() && trace.plans.last() != Some(&plan) {
+            trace.plans.push(plan.clone());
+        }
+        let estimate = estimator(&runtime).estimate();
+        for frame in executed {
+            cycles += 1;
+            trace.estimate.push(estimate.pose);
+            let goal = deliberative.goal().unwrap_or(world.goal.position);
+            // The rover process knows no truth: progress shows the estimated distance to go.
+            on_progress(&Progress {
+                cycles,
+                sim_time_s: frame.t,
+                time_fraction: (frame.t / mission.time_limit_s).min(1.0),
+                distance_to_goal_m: Point2::new(estimate.pose.x, estimate.pose.y).dist(goal),
+            });
+        }
+    };
+    runtime.settle(runtime.clock())?;
+    crate::run::forward_replies(runtime.bus(), &replies, operator)?;
+    trace.overlays = navigator_of(&runtime).overlays();
+
+    if let Some(goal) = deliberative.goal() {
+        world.goal.position = goal;
+    }
+    let estimate = estimator(&runtime).estimate().pose;
+    let scoring = remote_mut(&mut runtime)
+        .finish(world.goal.position, estimate)
+        .map_err(|e| RunError::Bus(BusError::Transport(e.to_string())))?;
+    if scoring.cycles != cycles {
+        return Err(RunError::Bus(BusError::Transport(format!(
+            "the simulator executed {} commands, the rover counted {cycles}",
+            scoring.cycles
+        ))));
+    }
+    trace.truth = scoring.truth.iter().map(|p| Pose3::from(*p)).collect();
+    let mut sensed = sensed_grid(&world);
+    for [c, r] in &scoring.sensed {
+        let (c, r) = (*c as usize, *r as usize);
+        if c < sensed.geometry.cols && r < sensed.geometry.rows {
+            *sensed.get_mut(c, r) = true;
+        }
+    }
+    trace.sensed = Some(sensed);
+    let spent = StageTimes {
+        navigation_s: runtime.busy_s("navigator"),
+        localization_s: runtime.busy_s("pose-estimator"),
+        platform_s: runtime.busy_s("platform"),
+    };
+    let report = Report {
+        outcome: outcome.as_str().into(),
+        message,
+        goal_error_m: scoring.goal_error_m,
+        distance_driven_m: scoring.distance_driven_m,
+        optimal_length_m: scoring.optimal_length_m,
+        hazard_contacts: scoring.hazard_contacts,
+        sim_time_s: scoring.sim_time_s,
+        wall_time_s: wall.elapsed().as_secs_f64(),
+        cycles,
+        sensing_actions: scoring.sensing_actions,
+        localization_error_m: scoring.localization_error_m,
+        navigator: navigator_of(&runtime).navigator_name().to_string(),
+        localizer: mission.localizer.clone(),
+        seed: mission.seed,
+        mission: mission.name.clone(),
+        straight_line_m: scoring.straight_line_m,
+        hazard_events: scoring.hazard_events,
+        compute_per_cycle: crate::run::per_cycle(spent, cycles),
+        components: runtime
+            .states()
+            .into_iter()
+            .map(|c| ComponentReport {
+                name: c.name.into(),
+                state: c.state.as_str().into(),
+                message: c.message,
+            })
+            .collect(),
+        fault: deliberative.diagnosis().map(|(d, cycle, time_s)| FaultReport {
+            kind: d.kind.as_str().into(),
+            component: d.component.clone(),
+            message: d.message.clone(),
+            cycle: *cycle,
+            time_s: *time_s,
+        }),
+        tasks: deliberative
+            .tasks()
+            .iter()
+            .map(|t| TaskReport {
+                id: t.id,
+                kind: t.kind.name().into(),
+                target: t.kind.target().map(|p| [p.x, p.y]),
+                state: t.state.as_str().into(),
+                message: t.message.clone(),
+            })
+            .collect(),
+    };
+    Ok(RunOutput { report, trace, world })
+}
+
+// `run_remote` adds these components, so the look-ups cannot fail.
+fn remote(rt: &Runtime) -> &RemotePlatform {
+    rt.get::<RemotePlatform>().expect("a remote run has a remote platform")
+}
+fn remote_mut(rt: &mut Runtime) -> &mut RemotePlatform {
+    rt.get_mut::<RemotePlatform>().expect("a remote run has a remote platform")
+}
+fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
+    rt.get::<PoseEstimatorComponent>().expect("every run has a pose estimator")
+}
+fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
+    rt.get::<NavigatorComponent>().expect("every run has a navigator")
+}
