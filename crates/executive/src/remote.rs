@@ -29,7 +29,7 @@ use crate::operator::OperatorLink;
 use crate::platform::{ScheduledFault, SimPlatform};
 use crate::reflexive::{NavigatorComponent, PoseEstimatorComponent};
 use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
-use crate::run::{Progress, RunError, RunOptions, RunOutput, RunSettings, Trace};
+use crate::run::{NoObserver, Progress, RunError, RunObserver, RunOptions, RunOutput, RunSettings, Trace};
 use crate::runtime::Runtime;
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
@@ -496,6 +496,21 @@ impl Component for RemotePlatform {
 /// faults are the simulator process's business. The report equals the single-process run's,
 /// wall-clock figures aside.
 pub fn run_remote(
+    world: World,
+    mission: &RunSettings,
+    options: &RunOptions,
+    origin: &str,
+    link: Box<dyn PlatformLink>,
+    on_progress: &mut dyn FnMut(&Progress),
+    operator: Option<&mut dyn OperatorLink>,
+) -> Result<RunOutput, RunError> {
+    run_remote_logged(world, mission, options, origin, link, on_progress, operator, &mut NoObserver)
+}
+
+/// [`run_remote`] with an observer of the rover process's own bus and of the final report and
+/// trace (a telemetry log); it gets no per-cycle records, which carry truth this side lacks.
+#[allow(clippy::too_many_arguments)]
+pub fn run_remote_logged(
     mut world: World,
     mission: &RunSettings,
     options: &RunOptions,
@@ -503,6 +518,7 @@ pub fn run_remote(
     link: Box<dyn PlatformLink>,
     on_progress: &mut dyn FnMut(&Progress),
     mut operator: Option<&mut dyn OperatorLink>,
+    observer: &mut dyn RunObserver,
 ) -> Result<RunOutput, RunError> {
     let wall = Instant::now();
     let navigator: Box<dyn Navigator> =
@@ -537,6 +553,7 @@ pub fn run_remote(
     };
     let mut deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
     let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
+    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
     runtime.initialize(0.0)?;
 
     let mut trace = Trace::default();
@@ -561,6 +578,9 @@ pub fn run_remote(
             break (*outcome, message.clone());
         }
         runtime.tick(now)?;
+        if let Some(tap) = tap {
+            observer.on_bus(&runtime.bus().take_tap(tap)?);
+        }
         let executed = remote_mut(&mut runtime).take_executed();
         let plan = navigator_of(&runtime).planned_path();
         if !plan.is_empty() && trace.plans.last() != Some(&plan) {
@@ -582,6 +602,9 @@ pub fn run_remote(
     };
     runtime.settle(runtime.clock())?;
     crate::run::forward_replies(runtime.bus(), &replies, operator)?;
+    if let Some(tap) = tap {
+        observer.on_bus(&runtime.bus().take_tap(tap)?);
+    }
     trace.overlays = navigator_of(&runtime).overlays();
 
     if let Some(goal) = deliberative.goal() {
@@ -658,6 +681,7 @@ pub fn run_remote(
             })
             .collect(),
     };
+    observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
 }
 

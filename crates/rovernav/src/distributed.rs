@@ -157,7 +157,7 @@ mod with {
     use rovernav_executive::messages::topics;
     use rovernav_executive::remote::{
         LinkError, PLATFORM_REPLY, PLATFORM_REQUEST, PlatformLink, PlatformReply, PlatformRequest,
-        PlatformServer, run_remote,
+        PlatformServer, run_remote_logged,
     };
     use rovernav_executive::{Mission, OperatorLink, RunOptions, RunSettings, build_world};
     use std::collections::VecDeque;
@@ -366,7 +366,9 @@ mod with {
             ZenohPlatformLink { transport: Arc::clone(&shared), replies, timeout, early: VecDeque::new() };
         let mut operator =
             ZenohOperator { transport: Arc::clone(&shared), commands, pending: VecDeque::new() };
-        let output = run_remote(
+        // The rover process logs its own bus (no truth lives here) and the final report.
+        let mut log = crate::output::RunLog::open(&out_dir)?;
+        let output = run_remote_logged(
             world,
             &RunSettings::of(&mission),
             &options,
@@ -374,7 +376,10 @@ mod with {
             Box::new(link),
             &mut |_| {},
             Some(&mut operator),
-        )?;
+            &mut log.recorder,
+        );
+        log.close(output.is_ok())?;
+        let output = output?;
         lock(&shared).publish(PLATFORM_DONE.name(), &encode(&PLATFORM_DONE, &output.report.cycles)?)?;
         crate::output::write_run_outputs(&out_dir, &output)?;
         let r = &output.report;

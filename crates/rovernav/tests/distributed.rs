@@ -100,6 +100,16 @@ y = 8.5
     }
 
     /// A report as JSON without its wall-clock figures.
+    /// Messages per topic of a telemetry log, read with the mcap crate.
+    fn bus_counts(path: &Path) -> std::collections::BTreeMap<String, u64> {
+        let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut counts = std::collections::BTreeMap::new();
+        for message in rovernav_telemetry::mcap::MessageStream::new(&bytes).unwrap() {
+            *counts.entry(message.unwrap().channel.topic.clone()).or_insert(0) += 1;
+        }
+        counts
+    }
+
     fn timeless_report(path: &Path) -> serde_json::Value {
         let mut report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
@@ -163,6 +173,14 @@ y = 8.5
         assert_eq!(one["outcome"], "reached", "{one}");
         assert_eq!(one, two, "the two-process run must be the single-process run");
         assert!(dir.0.join("two/traverse.png").exists());
+        // The rover process logs its own bus: the same platform frames and commands as the
+        // single-process run's log, and the same report.
+        let (one_log, two_log) =
+            (bus_counts(&dir.0.join("one/telemetry.mcap")), bus_counts(&dir.0.join("two/telemetry.mcap")));
+        for topic in ["/bus/platform/frame", "/bus/platform/command", "/executive/report"] {
+            assert!(two_log.get(topic).copied().unwrap_or(0) > 0, "{topic} in the rover's log: {two_log:?}");
+            assert_eq!(one_log.get(topic), two_log.get(topic), "{topic}");
+        }
         // The simulator's own summary agrees with the report the rover wrote.
         let summary = text(&sim_out.stdout);
         assert!(summary.contains(&format!("{} commands", two["cycles"])), "{summary}");
