@@ -9,9 +9,7 @@ use crate::CampaignError;
 use crate::output::write_atomic;
 use crate::plan::{Job, Plan, TerrainKind};
 use crate::row::Row;
-use rovernav_core::Point2;
 use rovernav_executive::{RunOutput, run_mission};
-use rovernav_viz::{TraverseScene, write_traverse_png};
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -92,23 +90,6 @@ fn run_one(plan: &Plan, job: &Job, failures_dir: Option<&Path>) -> Result<Row, C
 
 /// The traverse picture of a run, drawn as `rovernav run` draws `traverse.png`.
 pub fn traverse_png(output: &RunOutput) -> Result<Vec<u8>, CampaignError> {
-    let (world, trace) = (&output.world, &output.trace);
-    let hazards: Vec<Point2> = output.report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
-    let scene = TraverseScene {
-        terrain: &world.terrain,
-        hazard_height: world.rover.clearance,
-        sensed: trace.sensed.as_ref(),
-        plans: &trace.plans,
-        overlays: &trace.overlays,
-        driven: &trace.truth,
-        estimated: &trace.estimate,
-        hazards: &hazards,
-        start: world.start.position(),
-        goal: world.goal.position,
-        keep_out: &world.goal.keep_out,
-    };
-    let mut bytes = Vec::new();
-    write_traverse_png(&scene, &mut bytes)
-        .map_err(|e| CampaignError::Io { path: "traverse picture".into(), message: e.to_string() })?;
-    Ok(bytes)
+    rovernav_viz::run_traverse_png(&output.report, &output.world, &output.trace)
+        .map_err(|e| CampaignError::Io { path: "traverse picture".into(), message: e.to_string() })
 }

@@ -2,10 +2,8 @@
 //! file and renamed, so a reader never sees a half-written output.
 
 use anyhow::Context;
-use rovernav_core::Point2;
 use rovernav_executive::{Report, RunOutput, Trace, World};
 use rovernav_telemetry::TelemetryRecorder;
-use rovernav_viz::{TraverseScene, write_traverse_png};
 use std::path::{Path, PathBuf};
 
 /// Writes `path` atomically from a closure that produces the bytes.
@@ -35,22 +33,11 @@ pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) 
         b.push(b'\n');
         Ok(())
     })?;
-    let keep_out: Vec<Vec<Point2>> = world.goal.keep_out.clone();
-    let hazards: Vec<Point2> = report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
-    let scene = TraverseScene {
-        terrain: &world.terrain,
-        hazard_height: world.rover.clearance,
-        sensed: trace.sensed.as_ref(),
-        plans: &trace.plans,
-        overlays: &trace.overlays,
-        driven: &trace.truth,
-        estimated: &trace.estimate,
-        hazards: &hazards,
-        start: world.start.position(),
-        goal: world.goal.position,
-        keep_out: &keep_out,
-    };
-    write_atomic(&dir.join("traverse.png"), |b| Ok(write_traverse_png(&scene, &mut *b)?))
+    let picture = rovernav_viz::run_traverse_png(report, world, trace)?;
+    write_atomic(&dir.join("traverse.png"), |b| {
+        b.extend_from_slice(&picture);
+        Ok(())
+    })
 }
 
 /// A run's `telemetry.mcap`, opened before the run so every cycle is logged as it happens.

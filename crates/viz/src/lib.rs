@@ -37,6 +37,32 @@ pub struct TraverseScene<'a> {
     pub keep_out: &'a [Vec<Point2>],
 }
 
+/// The traverse picture of a run (`traverse.png`): the same drawing for `rovernav run`, its
+/// replay and a campaign's failure gallery.
+pub fn run_traverse_png(
+    report: &rovernav_executive::Report,
+    world: &rovernav_executive::World,
+    trace: &rovernav_executive::Trace,
+) -> std::io::Result<Vec<u8>> {
+    let hazards: Vec<Point2> = report.hazard_events.iter().map(|e| Point2::new(e.x, e.y)).collect();
+    let scene = TraverseScene {
+        terrain: &world.terrain,
+        hazard_height: world.rover.clearance,
+        sensed: trace.sensed.as_ref(),
+        plans: &trace.plans,
+        overlays: &trace.overlays,
+        driven: &trace.truth,
+        estimated: &trace.estimate,
+        hazards: &hazards,
+        start: world.start.position(),
+        goal: world.goal.position,
+        keep_out: &world.goal.keep_out,
+    };
+    let mut bytes = Vec::new();
+    write_traverse_png(&scene, &mut bytes)?;
+    Ok(bytes)
+}
+
 /// Longest image side in pixels.
 const MAX_SIDE: usize = 1000;
 
