@@ -28,7 +28,7 @@ use crate::messages::{ControlAction, FrameMsg, HoldMsg, MotionRequest, PoseMsg, 
 use crate::operator::OperatorLink;
 use crate::platform::{ScheduledFault, SimPlatform};
 use crate::reflexive::{NavigatorComponent, PoseEstimatorComponent};
-use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
+use crate::report::{HazardEvent, Report, StageTimes};
 use crate::run::{NoObserver, Progress, RunError, RunObserver, RunOptions, RunOutput, RunSettings, Trace};
 use crate::runtime::Runtime;
 use crate::world::World;
@@ -653,33 +653,7 @@ pub fn run_remote_logged(
         straight_line_m: scoring.straight_line_m,
         hazard_events: scoring.hazard_events,
         compute_per_cycle: crate::run::per_cycle(spent, cycles),
-        components: runtime
-            .states()
-            .into_iter()
-            .map(|c| ComponentReport {
-                name: c.name.into(),
-                state: c.state.as_str().into(),
-                message: c.message,
-            })
-            .collect(),
-        fault: deliberative.diagnosis().map(|(d, cycle, time_s)| FaultReport {
-            kind: d.kind.as_str().into(),
-            component: d.component.clone(),
-            message: d.message.clone(),
-            cycle: *cycle,
-            time_s: *time_s,
-        }),
-        tasks: deliberative
-            .tasks()
-            .iter()
-            .map(|t| TaskReport {
-                id: t.id,
-                kind: t.kind.name().into(),
-                target: t.kind.target().map(|p| [p.x, p.y]),
-                state: t.state.as_str().into(),
-                message: t.message.clone(),
-            })
-            .collect(),
+        ..crate::run::executive_outcome(&runtime, &deliberative)
     };
     observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })

@@ -453,6 +453,16 @@ pub fn run_world_with(
         straight_line_m: world.start.position().dist(goal.position),
         hazard_events,
         compute_per_cycle: per_cycle(spent, cycles),
+        ..executive_outcome(&runtime, &deliberative)
+    };
+    observer.on_finish(&report, &trace);
+    Ok(RunOutput { report, trace, world })
+}
+
+/// The report's executive part: final component states, the diagnosed fault and each task's
+/// state (the same for a local and a remote run).
+pub(crate) fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
+    Report {
         components: runtime
             .states()
             .into_iter()
@@ -480,9 +490,8 @@ pub fn run_world_with(
                 message: t.message.clone(),
             })
             .collect(),
-    };
-    observer.on_finish(&report, &trace);
-    Ok(RunOutput { report, trace, world })
+        ..Report::default()
+    }
 }
 
 /// Adds a run's components in stepping order around a platform (the simulator in process, or
