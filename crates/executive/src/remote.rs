@@ -33,7 +33,7 @@ use crate::run::{NoObserver, Progress, RunError, RunObserver, RunOptions, RunOut
 use crate::runtime::Runtime;
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
-use rovernav_core::{Grid2, GridGeometry, Navigator, Point2, Pose3};
+use rovernav_core::{Grid2, GridGeometry, Point2, Pose3};
 use rovernav_sim::Simulator;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -521,21 +521,7 @@ pub fn run_remote_logged(
     observer: &mut dyn RunObserver,
 ) -> Result<RunOutput, RunError> {
     let wall = Instant::now();
-    let navigator: Box<dyn Navigator> =
-        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
-            RunError::UnknownNavigator {
-                origin: origin.into(),
-                name: mission.navigator.clone(),
-                known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
-            }
-        })?;
-    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
-        .ok_or_else(|| RunError::UnknownLocalizer {
-            origin: origin.into(),
-            name: mission.localizer.clone(),
-            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
-        })?;
+    let (navigator, localizer) = crate::run::algorithms(&world, mission, origin)?;
 
     let mut runtime = Runtime::new(Bus::in_process())?;
     let platform = Box::new(RemotePlatform::new(link, &mission.name, mission.seed));

@@ -285,21 +285,7 @@ pub fn run_world_with(
     mut operator: Option<&mut dyn OperatorLink>,
 ) -> Result<RunOutput, RunError> {
     let wall = Instant::now();
-    let navigator: Box<dyn Navigator> =
-        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
-            RunError::UnknownNavigator {
-                origin: origin.into(),
-                name: mission.navigator.clone(),
-                known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
-            }
-        })?;
-    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
-        .ok_or_else(|| RunError::UnknownLocalizer {
-            origin: origin.into(),
-            name: mission.localizer.clone(),
-            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
-        })?;
+    let (navigator, localizer) = algorithms(&world, mission, origin)?;
     let sim = Simulator::new(
         world.terrain.clone(),
         world.rover.clone(),
@@ -457,6 +443,33 @@ pub fn run_world_with(
     };
     observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
+}
+
+/// A localiser chosen by name.
+type BoxedLocalizer = Box<dyn rovernav_core::Localizer>;
+
+/// The navigator and localiser a mission names, the localiser starting at the world's start.
+pub(crate) fn algorithms(
+    world: &World,
+    mission: &RunSettings,
+    origin: &str,
+) -> Result<(Box<dyn Navigator>, BoxedLocalizer), RunError> {
+    let navigator: Box<dyn Navigator> =
+        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
+            RunError::UnknownNavigator {
+                origin: origin.into(),
+                name: mission.navigator.clone(),
+                known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
+            }
+        })?;
+    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
+    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
+        .ok_or_else(|| RunError::UnknownLocalizer {
+            origin: origin.into(),
+            name: mission.localizer.clone(),
+            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
+        })?;
+    Ok((navigator, localizer))
 }
 
 /// The report's executive part: final component states, the diagnosed fault and each task's
