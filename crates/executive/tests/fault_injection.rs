@@ -3,7 +3,12 @@
 //! the sensor in Failure, a message naming the fault, and every executed command in the log.
 
 use rovernav_core::{NavCommand, SensorFrame};
-use rovernav_executive::{CycleRecord, Mission, Report, RunObserver, Trace, World, run_mission_observed};
+use rovernav_executive::{
+    CycleRecord, Mission, Report, RunObserver, RunOptions, RunSettings, Trace, World, build_world,
+    run_mission_observed, run_world_with,
+};
+use rovernav_terrain::MarsYardParams;
+use rovernav_terrain::procedural::{add_craters, yard_craters};
 
 /// A 12 m yard with one `[[faults]]` entry.
 fn mission_with_fault(fault: &str) -> Mission {
@@ -164,8 +169,29 @@ x = 20.0
 y = 20.0
 "#;
     let mission = Mission::from_toml(text, "trial-5").expect("valid mission");
+    // The yard generator now keeps craters off the start and goal pads; the tilt hazard SR2
+    // rammed was such a crater, so the world of the campaign trial is rebuilt with it put back.
+    let mut world = build_world(&mission, "trial-5").expect("world");
+    let params = MarsYardParams {
+        width_m: 30.0,
+        height_m: 30.0,
+        resolution: 0.05,
+        seed: mission.seed,
+        ..MarsYardParams::default()
+    };
+    let pads = [(5.0, 5.0), (20.0, 20.0)];
+    let dropped: Vec<_> = yard_craters(&params)
+        .into_iter()
+        .filter(|c| pads.iter().any(|&(x, y)| (c.x - x).hypot(c.y - y) < 1.0 + 0.75 * c.diameter))
+        .collect();
+    assert!(!dropped.is_empty(), "the trial's world had a crater at a pad");
+    add_craters(&mut world.terrain.dem, &dropped);
+    let options = RunOptions::of(&mission, &world);
     let mut log = Log::default();
-    let r = run_mission_observed(&mission, "trial-5", &mut |_| {}, &mut log).expect("runs").report;
+    let r =
+        run_world_with(world, &RunSettings::of(&mission), &options, "trial-5", &mut |_| {}, &mut log, None)
+            .expect("runs")
+            .report;
     assert_eq!(r.outcome, "help_requested", "{}", r.message);
     assert_eq!(r.hazard_contacts, 3, "stopped at the third contact: {}", r.message);
     let fault = r.fault.as_ref().expect("a diagnosed fault");

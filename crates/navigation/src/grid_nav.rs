@@ -7,6 +7,14 @@
 //! and incremental replanning after each map update, it is MRPTA's navigation (`mrpta`, paper 004
 //! sections 3.4-3.5: the planner's path is cut to its sensed part and handed to a segment driver
 //! that rotates in place when consecutive segments differ by more than 10 deg).
+//!
+//! The rover's shape is respected in three places. The planning grid walls off only where the
+//! body could not pass driving straight (half its width from a hazard) and makes the band where
+//! it could not turn in place (its half-diagonal) expensive; each plan's in-place turns are
+//! swept with the body outline and a vertex whose turn would meet a hazard is closed and the
+//! plan redone; and the rover drives only over ground it has seen under its whole footprint and
+//! stops only where it can turn. A turn that becomes unsafe after new sensing is refused at
+//! execution and the rover retraces its latest motions to room to turn.
 
 use crate::terrain_model::{CostMode, TerrainModel};
 use rovernav_core::{
@@ -74,7 +82,41 @@ pub struct GridNavigator {
     full_scan_pending: bool,
     /// Where the safety buffer was dropped to pass a tight spot (restored 3 m away).
     squeezed_at: Option<Point2>,
+    /// The latest motions, newest last, to retrace out of a spot too tight to turn in.
+    trail: Vec<Motion>,
 }
+
+/// Replans allowed per planning cycle to route around turns the body cannot make.
+const MAX_TURN_REPAIRS: usize = 6;
+
+/// Radius closed around a vertex where the rover cannot turn (m).
+const TURN_CLOSE_RADIUS_M: f64 = 0.15;
+
+/// A motion the rover made, to undo.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Motion {
+    /// An arc: distance (m) and curvature (1/m).
+    Drive(f64, f64),
+    /// A turn in place (rad).
+    Turn(f64),
+}
+
+/// The result of one planning attempt.
+enum PlanAttempt {
+    /// Waypoints queued, or the navigator decided to look or finish.
+    Done,
+    /// The plan needs an in-place turn here that the body's sweep cannot make.
+    TurnBlocked(Point2),
+}
+
+/// Turns needed within this distance of the rover (m) are its own, checked when executed.
+const NEAR_START_M: f64 = 0.3;
+
+/// Motions remembered for retracing.
+const MAX_TRAIL: usize = 8;
+
+/// How far the rover backs out when it cannot turn in place (m).
+const BACK_OUT_M: f64 = 0.3;
 
 /// Distance from the squeeze point after which the safety buffer is restored (m).
 const SQUEEZE_RELEASE_M: f64 = 3.0;
@@ -111,6 +153,15 @@ impl GridNavigator {
             full_scan_at: None,
             full_scan_pending: false,
             squeezed_at: None,
+            trail: Vec::new(),
+        }
+    }
+
+    /// Records a motion for retracing, forgetting the oldest beyond [`MAX_TRAIL`].
+    fn remember(&mut self, motion: Motion) {
+        self.trail.push(motion);
+        if self.trail.len() > MAX_TRAIL {
+            self.trail.remove(0);
         }
     }
 
@@ -130,27 +181,66 @@ impl GridNavigator {
     }
 
     /// Plans from the estimate to the goal and queues the waypoints of the sensed, safe prefix.
-    fn replan(&mut self, from: Point2, goal: Point2) {
+    ///
+    /// The grid keeps the rover's centre where it fits driving straight, so a plan may run
+    /// through gaps too tight to turn in: each plan is checked for the in-place turns its
+    /// segments need, and a vertex where the body's sweep would meet a hazard is closed and the
+    /// plan redone (lazy collision checking), a few times at most.
+    fn replan(&mut self, from: Point2, yaw: f64, goal: Point2) {
+        self.waypoints.clear();
+        let mut closed: Vec<Point2> = Vec::new();
+        for _attempt in 0..=MAX_TURN_REPAIRS {
+            match self.plan_once(from, yaw, goal, &closed) {
+                PlanAttempt::Done => return,
+                PlanAttempt::TurnBlocked(at) => closed.push(at),
+            }
+        }
+        // Every repair found another blocked turn: drive what the last plan allows; the
+        // execution-time check refuses any turn that would still meet a hazard.
+        self.waypoints.clear();
+    }
+
+    /// One planning attempt with the turn vertices in `closed` blocked.
+    fn plan_once(&mut self, from: Point2, yaw: f64, goal: Point2, closed: &[Point2]) -> PlanAttempt {
         self.waypoints.clear();
         let terrain = self.terrain.as_ref().expect("map initialised before planning");
-        let grid = terrain.cost_grid(self.cost_mode(), from, goal);
+        let mut grid = terrain.cost_grid(self.cost_mode(), from, goal);
         let g = grid.geometry();
+        for &p in closed {
+            let reach = (TURN_CLOSE_RADIUS_M / g.resolution).ceil() as isize;
+            if let Some((c, r)) = g.cell_of(p.x, p.y) {
+                for dr in -reach..=reach {
+                    for dc in -reach..=reach {
+                        let (rr, cc) = (r as isize + dr, c as isize + dc);
+                        let q = Point2::new(p.x + dc as f64 * g.resolution, p.y + dr as f64 * g.resolution);
+                        if rr >= 0 && cc >= 0 && q.dist(p) <= TURN_CLOSE_RADIUS_M {
+                            let _ = grid.set_cost(Cell::new(rr as usize, cc as usize), f32::INFINITY);
+                        }
+                    }
+                }
+            }
+        }
         let to_cell = |p: Point2| -> Option<Cell> { g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c)) };
         let (Some(start), Some(goal_cell)) = (to_cell(from), to_cell(goal)) else {
             self.finish = Some((Outcome::Unreachable, "goal or rover outside the navigation map".into()));
-            return;
+            return PlanAttempt::Done;
         };
         self.planner.set_grid(grid);
         self.stats.plans += 1;
         let plan = match self.planner.plan(start, goal_cell) {
             Ok(plan) => plan,
             Err(PlanError::NoPath { .. }) => {
+                if !closed.is_empty() {
+                    // Only the closed turn vertices block the way: keep the rover where it is
+                    // and look again rather than declare the goal unreachable.
+                    return PlanAttempt::Done;
+                }
                 // Before giving up, look all around from here: close-range views replace the
                 // noisier far-range assessments that may have closed the way.
                 if self.full_scan_at.is_none_or(|p| p.dist(from) > 0.5) {
                     self.full_scan_at = Some(from);
                     self.full_scan_pending = true;
-                    return;
+                    return PlanAttempt::Done;
                 }
                 // Then squeeze: the safety buffer is margin for sensing error, not the rover's
                 // size, so a way that only the buffer closes is taken with the bare rover
@@ -158,18 +248,17 @@ impl GridNavigator {
                 if self.squeezed_at.is_none() && self.config.safety_buffer > 0.0 {
                     self.squeezed_at = Some(from);
                     self.terrain.as_mut().expect("map initialised").set_safety_buffer(0.0);
-                    self.replan(from, goal);
-                    return;
+                    return self.plan_once(from, yaw, goal, closed);
                 }
                 self.finish = Some((
                     Outcome::Unreachable,
                     "no path to the goal through known-safe and unknown terrain".into(),
                 ));
-                return;
+                return PlanAttempt::Done;
             }
             Err(e) => {
                 self.finish = Some((Outcome::Aborted, format!("planner failed: {e}")));
-                return;
+                return PlanAttempt::Done;
             }
         };
         let grid = self.planner.grid().expect("grid set above");
@@ -190,7 +279,7 @@ impl GridNavigator {
             // The cells under the rover itself may be unsensed (the cameras look ahead).
             let near_rover = p.dist(from) < 0.3;
             let passable = grid.cost_at_point(grid.world_to_grid(p)).is_finite();
-            near_rover || terrain.is_assessed(p) && passable
+            near_rover || passable && terrain.footprint_seen(p, from, 0.5 * self.rover.length)
         };
         let driver = SegmentDriverConfig {
             turn_threshold: self.config.turn_threshold,
@@ -198,6 +287,23 @@ impl GridNavigator {
             ..Default::default()
         };
         let segments = segment_path(Pose2::new(from.x, from.y, 0.0), &step_path, safe, &driver);
+        // The turns the waypoints need, from the rover's heading: the first one the execution
+        // check handles (the rover can back out); later ones are repaired by replanning.
+        let mut heading = yaw;
+        let mut at = from;
+        for (i, &next) in segments.waypoints.iter().enumerate() {
+            let bearing = next.sub(at).angle();
+            let turn = angle_diff(bearing, heading);
+            if i > 0 && at.dist(from) > NEAR_START_M && turn.abs() > self.config.turn_threshold {
+                let pose = Pose2::new(at.x, at.y, heading);
+                let other_way = turn - std::f64::consts::TAU * turn.signum();
+                if !terrain.turn_is_clear(pose, turn) && !terrain.turn_is_clear(pose, other_way) {
+                    return PlanAttempt::TurnBlocked(at);
+                }
+            }
+            heading = bearing;
+            at = next;
+        }
         // Look where the plan leaves sensed terrain (or toward the goal).
         let look_at =
             if segments.complete { goal } else { step_path[segments.sensed_points.min(step_path.len() - 1)] };
@@ -208,10 +314,11 @@ impl GridNavigator {
             .windows(2)
             .map(|w| w[0].dist(w[1]))
             .sum();
-        if length < 0.15 {
-            return;
+        if length >= 0.15 {
+            let waypoints = stop_where_turnable(from, &segments.waypoints, |p| terrain.can_turn_freely(p));
+            self.waypoints.extend(waypoints);
         }
-        self.waypoints.extend(segments.waypoints);
+        PlanAttempt::Done
     }
 
     fn sense(&mut self, heading: f64, bearing: f64) -> NavCommand {
@@ -221,6 +328,35 @@ impl GridNavigator {
         requests.push(SenseRequest::BodyFront);
         self.stats.sensing_actions += requests.len() as u64;
         NavCommand::Sense(requests)
+    }
+}
+
+/// The waypoints cut so the rover stops where it can turn in place freely: the last point of
+/// the polyline from `from` through `waypoints` (sampled every 5 cm) where `turnable` holds and
+/// at least 0.15 m from the start. Unchanged when no such point exists.
+fn stop_where_turnable(from: Point2, waypoints: &[Point2], turnable: impl Fn(Point2) -> bool) -> Vec<Point2> {
+    let mut best: Option<(usize, Point2)> = None;
+    let mut prev = from;
+    let mut travelled = 0.0;
+    for (i, &next) in waypoints.iter().enumerate() {
+        let d = prev.dist(next);
+        let n = (d / 0.05).ceil().max(1.0) as usize;
+        for k in 1..=n {
+            let p = prev.add(next.sub(prev).scale(k as f64 / n as f64));
+            if travelled + d * k as f64 / n as f64 >= 0.15 && turnable(p) {
+                best = Some((i, p));
+            }
+        }
+        travelled += d;
+        prev = next;
+    }
+    match best {
+        Some((i, p)) => {
+            let mut out = waypoints[..i].to_vec();
+            out.push(p);
+            out
+        }
+        None => waypoints.to_vec(),
     }
 }
 
@@ -289,6 +425,7 @@ impl Navigator for GridNavigator {
                     LastCommand::Other => {}
                 }
                 // Back away from whatever the body met, then look again.
+                self.trail.clear();
                 self.backing_out = true;
                 self.last_command = LastCommand::Reverse;
                 return NavCommand::Drive { distance: -0.3, curvature: 0.0, guard: DriveGuard::default() };
@@ -304,7 +441,7 @@ impl Navigator for GridNavigator {
         }
         if !input.frame.clouds.is_empty() {
             self.terrain.as_mut().expect("map initialised").ingest(&input.frame.clouds, &input.estimate);
-            self.replan(here, goal);
+            self.replan(here, est.yaw, goal);
             if let Some((outcome, why)) = self.finish.clone() {
                 return NavCommand::Finish(outcome, why);
             }
@@ -332,8 +469,48 @@ impl Navigator for GridNavigator {
             let bearing = next.sub(here).angle();
             let error = angle_diff(bearing, est.yaw);
             if error.abs() > self.config.turn_threshold {
-                self.last_command = LastCommand::Turn(error.signum());
-                return NavCommand::Turn { angle: error };
+                // The body sweeps its whole outline when turning in place: take the way round
+                // that stays clear of sensed hazards, or back out and plan again from there.
+                let terrain = self.terrain.as_ref().expect("map initialised");
+                let pose = est.pose2();
+                let other_way = error - std::f64::consts::TAU * error.signum();
+                let angle = [error, other_way].into_iter().find(|&a| terrain.turn_is_clear(pose, a));
+                if let Some(angle) = angle {
+                    self.last_command = LastCommand::Turn(angle.signum());
+                    self.remember(Motion::Turn(angle));
+                    return NavCommand::Turn { angle };
+                }
+                self.waypoints.clear();
+                // Undo the latest motion: the rover made it without meeting anything, and
+                // stops only where it could turn (see `plan_once`), so retracing gets it back
+                // to room to turn.
+                match self.trail.pop() {
+                    Some(Motion::Drive(distance, curvature)) => {
+                        self.last_command = LastCommand::Reverse;
+                        return NavCommand::Drive {
+                            distance: -distance,
+                            curvature,
+                            guard: DriveGuard::default(),
+                        };
+                    }
+                    Some(Motion::Turn(angle)) => {
+                        self.last_command = LastCommand::Turn(-angle.signum());
+                        return NavCommand::Turn { angle: -angle };
+                    }
+                    None => {}
+                }
+                if terrain.drive_is_clear(pose, -BACK_OUT_M) {
+                    self.last_command = LastCommand::Reverse;
+                    return NavCommand::Drive {
+                        distance: -BACK_OUT_M,
+                        curvature: 0.0,
+                        guard: DriveGuard::default(),
+                    };
+                }
+                let why =
+                    "boxed in: neither turning in place nor backing out keeps clear of the sensed hazards";
+                self.finish = Some((Outcome::HelpRequested, why.into()));
+                return NavCommand::Finish(Outcome::HelpRequested, why.into());
             }
             self.last_command = LastCommand::Forward;
             self.waypoints.pop_front();
@@ -341,6 +518,7 @@ impl Navigator for GridNavigator {
             // The arc through `next` that starts along the current heading.
             let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
             let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
+            self.remember(Motion::Drive(distance, curvature));
             return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
         }
         if self.full_scan_pending {
@@ -377,6 +555,21 @@ impl Navigator for GridNavigator {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_rover_stops_at_the_last_point_where_it_can_turn() {
+        let wps = [Point2::new(1.0, 0.0), Point2::new(1.0, 2.0)];
+        // Room to turn only for x < 0.6 or y > 1.5.
+        let turnable = |p: Point2| p.x < 0.6 || p.y > 1.5;
+        let cut = stop_where_turnable(Point2::new(0.0, 0.0), &wps, turnable);
+        assert_eq!(cut.len(), 2);
+        assert!(cut[1].dist(Point2::new(1.0, 2.0)) < 1e-9, "the end is turnable: {cut:?}");
+        let cut = stop_where_turnable(Point2::new(0.0, 0.0), &wps, |p: Point2| p.x < 0.6);
+        assert_eq!(cut.len(), 1);
+        assert!((cut[0].x - 0.55).abs() < 1e-9 && cut[0].y.abs() < 1e-9, "{cut:?}");
+        // Nowhere to turn: the plan is kept as it was.
+        assert_eq!(stop_where_turnable(Point2::new(0.0, 0.0), &wps, |_| false), wps.to_vec());
+    }
 
     #[test]
     fn truncated_polyline_has_the_requested_length() {

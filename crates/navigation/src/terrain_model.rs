@@ -1,16 +1,25 @@
 //! The navigator's view of the terrain: the MRPTA terrain evaluator (robot-centred T-grid) fused
 //! into a world map, plus a world-aligned hazard layer grown into configuration space for
-//! planning (paper 000 section 2: obstacles grown by the rover size and a safety buffer).
+//! planning (paper 000 section 2: obstacles grown by the rover size and a safety buffer): a wall
+//! at half the rover's width (it cannot pass there even driving straight), an expensive band
+//! out to its half-diagonal (it could not turn in place there), and exact sweeps of the body
+//! outline for the turns and drives a plan needs.
 
 use rovernav_core::{
-    Grid2, GridGeometry, Overlay, OverlayKind, Point2, PointCloud, PoseEstimate, RoverConfig,
+    Grid2, GridGeometry, Overlay, OverlayKind, Point2, PointCloud, Pose2, PoseEstimate, RoverConfig,
 };
 use rovernav_mapping::WorldMap;
-use rovernav_perception::{TerrainConfig, TerrainEvaluator};
+use rovernav_perception::{HazardHeight, TerrainConfig, TerrainEvaluator};
 use rovernav_planning::{Cell, CostGrid};
 
-/// Fraction of the rover's clearance and tilt limits at which terrain counts as a hazard.
+/// Fraction of the rover's clearance and tilt limits at which terrain counts as a hazard when
+/// cell heights are point means (which lose part of a small rock's height).
 pub const HAZARD_MARGIN: f64 = 0.8;
+
+/// Fraction of the rover's clearance at which a step counts as a hazard on the cells' top
+/// heights ([`HazardHeight::Top`]): that estimate is not biased low, so the margin only has to
+/// cover range noise and the wheels settling a few centimetres into the relief.
+pub const TOP_HAZARD_MARGIN: f64 = 0.9;
 
 /// Cell size of the robot-centred grid (m): finer than MRPTA's 0.15 m so that rocks of a few
 /// decimetres, which a Rocky 7-sized rover cannot straddle, span several cells.
@@ -21,6 +30,22 @@ const ESCAPE_COST: f32 = 50.0;
 
 /// Cost per metre of a cell MRPTA grades not traversable but the hazard model does not block.
 const BLOCKED_GRADE_COST: f32 = 30.0;
+
+/// Cost per metre of a cell where the rover fits driving straight but could not turn in place
+/// (between the inscribed and the circumscribed growth): passable, but worth a detour.
+const TIGHT_COST: f32 = 4.0;
+
+/// Allowance added to the rover's half-width for driving straight (m): the arcs the motion
+/// controller drives start up to 10 deg off the chord, which swings the front corners out by
+/// about half the length times sin(10 deg).
+const HEADING_ALLOWANCE: f64 = 0.07;
+
+/// Radius around a path point whose cells must have been seen before the rover drives there
+/// (m): between half the rover's width and half its length.
+pub const FOOTPRINT_CHECK_M: f64 = 0.35;
+
+/// Clearance kept between the body outline and a hazard cell's centre when turning in place (m).
+const TURN_MARGIN: f64 = 0.08;
 
 /// How unknown and sensed cells are costed for the planner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,11 +64,19 @@ pub struct TerrainModel {
     hazard: Grid2<bool>,
     /// Cells whose hazard state has been assessed.
     assessed: Grid2<bool>,
-    /// Hazards grown by the rover radius plus buffer (recomputed after each ingest).
+    /// Cells that hold range points themselves (a window can assess a cell it has no points in).
+    observed: Grid2<bool>,
+    /// Hazards grown by the rover radius plus buffer: where the rover cannot turn in place
+    /// (recomputed after each ingest).
     grown: Grid2<bool>,
+    /// Hazards grown by half the rover width plus buffer and heading allowance: where even
+    /// driving straight would put the body over a hazard.
+    core: Grid2<bool>,
     /// Cells where the rover centre would enter a keep-out zone (grown like hazards).
     keep_out: Grid2<bool>,
     growth: f64,
+    core_growth: f64,
+    rover: RoverConfig,
     config: TerrainConfig,
 }
 
@@ -60,9 +93,13 @@ impl TerrainModel {
             world: WorldMap::unknown(geometry).expect("non-empty navigation map"),
             hazard: Grid2::filled(geometry, false),
             assessed: Grid2::filled(geometry, false),
+            observed: Grid2::filled(geometry, false),
             grown: Grid2::filled(geometry, false),
+            core: Grid2::filled(geometry, false),
             keep_out: Grid2::filled(geometry, false),
             growth: config.growth(),
+            core_growth: core_growth(rover, safety_buffer),
+            rover: rover.clone(),
             config,
         }
     }
@@ -86,7 +123,8 @@ impl TerrainModel {
     pub fn perception_config(rover: &RoverConfig, safety_buffer: f64) -> TerrainConfig {
         TerrainConfig {
             safety_buffer,
-            clearance: rover.clearance * HAZARD_MARGIN,
+            hazard_height: HazardHeight::Top,
+            clearance: rover.clearance * TOP_HAZARD_MARGIN,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
             resolution: T_GRID_RESOLUTION,
             ..TerrainConfig::for_rover(rover)
@@ -122,6 +160,9 @@ impl TerrainModel {
                 let (x, y) = wg.center(c, r);
                 let Some((lc, lr)) = lg.cell_of(x, y) else { continue };
                 let i = lg.index(lc, lr);
+                if layers.map.point_count.data[i] > 0 {
+                    *self.observed.get_mut(c, r) = true;
+                }
                 if layers.step.data[i].is_finite() || layers.hazard.data[i] {
                     *self.assessed.get_mut(c, r) = true;
                     *self.hazard.get_mut(c, r) = layers.hazard.data[i];
@@ -132,27 +173,8 @@ impl TerrainModel {
     }
 
     fn grow_hazards(&mut self) {
-        let g = self.hazard.geometry;
-        let reach = (self.growth / g.resolution).ceil() as isize;
-        let r2 = (self.growth / g.resolution).powi(2);
-        let offsets: Vec<(isize, isize)> = (-reach..=reach)
-            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
-            .filter(|&(dr, dc)| ((dr * dr + dc * dc) as f64) <= r2 + 0.5)
-            .collect();
-        self.grown.data.iter_mut().for_each(|v| *v = false);
-        for r in 0..g.rows {
-            for c in 0..g.cols {
-                if !*self.hazard.get(c, r) {
-                    continue;
-                }
-                for &(dr, dc) in &offsets {
-                    let (rr, cc) = (r as isize + dr, c as isize + dc);
-                    if rr >= 0 && cc >= 0 && (rr as usize) < g.rows && (cc as usize) < g.cols {
-                        *self.grown.get_mut(cc as usize, rr as usize) = true;
-                    }
-                }
-            }
-        }
+        dilate(&self.hazard, self.growth, &mut self.grown);
+        dilate(&self.hazard, self.core_growth, &mut self.core);
     }
 
     /// Growth of hazards into configuration space (rover radius plus safety buffer, m).
@@ -163,7 +185,92 @@ impl TerrainModel {
     /// Regrows the hazards with another safety buffer (the rover radius always stays).
     pub fn set_safety_buffer(&mut self, buffer: f64) {
         self.growth = self.config.rover_radius + buffer.max(0.0);
+        self.core_growth = core_growth(&self.rover, buffer);
         self.grow_hazards();
+    }
+
+    /// Whether the rover could turn in place all the way round at `p`: no hazard cell within
+    /// the body's half-diagonal plus a margin.
+    pub fn can_turn_freely(&self, p: Point2) -> bool {
+        let g = self.hazard.geometry;
+        let reach = (0.5 * self.rover.length + TURN_MARGIN).hypot(0.5 * self.rover.width + TURN_MARGIN);
+        let steps = (reach / g.resolution).ceil() as isize;
+        let Some((c, r)) = g.cell_of(p.x, p.y) else { return true };
+        for dr in -steps..=steps {
+            for dc in -steps..=steps {
+                let (rr, cc) = (r as isize + dr, c as isize + dc);
+                if rr < 0 || cc < 0 || rr as usize >= g.rows || cc as usize >= g.cols {
+                    continue;
+                }
+                let (x, y) = g.center(cc as usize, rr as usize);
+                if *self.hazard.get(cc as usize, rr as usize) && Point2::new(x, y).dist(p) <= reach {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Whether turning in place by `angle` (rad, signed) from `pose` keeps the body outline,
+    /// plus a margin, clear of every hazard cell over the whole sweep. Cells already under the
+    /// body at `pose` are not counted: the rover stands there without contact, so they are
+    /// either noise or too low to matter, and counting them would forbid every motion.
+    pub fn turn_is_clear(&self, pose: Pose2, angle: f64) -> bool {
+        // Body-frame angles of the sweep, a few degrees apart so no cell slips between samples.
+        let samples = (angle.abs() / 4f64.to_radians()).ceil().max(1.0) as usize;
+        let poses =
+            (1..=samples).map(|k| Pose2::new(pose.x, pose.y, pose.yaw + angle * k as f64 / samples as f64));
+        self.motion_is_clear(pose, poses)
+    }
+
+    /// Whether driving straight by `distance` (m, negative backwards) from `pose` keeps the body
+    /// outline, plus a margin, clear of every hazard cell not already under it.
+    pub fn drive_is_clear(&self, pose: Pose2, distance: f64) -> bool {
+        let samples = (distance.abs() / 0.05).ceil().max(1.0) as usize;
+        let (s, c) = pose.yaw.sin_cos();
+        let poses = (1..=samples).map(|k| {
+            let d = distance * k as f64 / samples as f64;
+            Pose2::new(pose.x + d * c, pose.y + d * s, pose.yaw)
+        });
+        self.motion_is_clear(pose, poses)
+    }
+
+    /// Whether the body outline at each of `poses`, grown by a margin, covers no hazard cell
+    /// centre that is not already under the bare body at `start`.
+    fn motion_is_clear(&self, start: Pose2, poses: impl Iterator<Item = Pose2>) -> bool {
+        let g = self.hazard.geometry;
+        let (half_l, half_w) = (0.5 * self.rover.length + TURN_MARGIN, 0.5 * self.rover.width + TURN_MARGIN);
+        let reach = half_l.hypot(half_w);
+        let inside = |pose: Pose2, x: f64, y: f64, margin: f64| {
+            let (s, co) = pose.yaw.sin_cos();
+            let (dx, dy) = (x - pose.x, y - pose.y);
+            let (bx, by) = (co * dx + s * dy, -s * dx + co * dy);
+            bx.abs() <= 0.5 * self.rover.length + margin && by.abs() <= 0.5 * self.rover.width + margin
+        };
+        let covers = |pose: Pose2, x: f64, y: f64| inside(pose, x, y, TURN_MARGIN);
+        let under_body = |pose: Pose2, x: f64, y: f64| inside(pose, x, y, 0.0);
+        let clamp_x = |x: f64| x.clamp(g.origin_x, g.origin_x + g.width_m() - 1e-9);
+        let clamp_y = |y: f64| y.clamp(g.origin_y, g.origin_y + g.height_m() - 1e-9);
+        for pose in poses {
+            let (Some((c0, r0)), Some((c1, r1))) = (
+                g.cell_of(clamp_x(pose.x - reach), clamp_y(pose.y - reach)),
+                g.cell_of(clamp_x(pose.x + reach), clamp_y(pose.y + reach)),
+            ) else {
+                continue;
+            };
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    if !*self.hazard.get(c, r) {
+                        continue;
+                    }
+                    let (x, y) = g.center(c, r);
+                    if covers(pose, x, y) && !under_body(start, x, y) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// Records an obstacle the body met but perception missed (a hazard contact), so the
@@ -184,6 +291,52 @@ impl TerrainModel {
             }
         }
         self.grow_hazards();
+    }
+
+    /// Whether the body could stand at `p` on terrain it has seen: every cell within
+    /// [`FOOTPRINT_CHECK_M`] of `p` is assessed and either holds range points or is a one-cell
+    /// gap among cells that do. A footprint window assesses cells it has no points in, and a rock
+    /// in an occlusion shadow is such a hole: driving over it on the strength of its neighbours
+    /// is how a rover meets a rock it never saw. Cells within `exempt_radius` of `exempt` (the
+    /// ground under the rover, which its cameras cannot see) are not checked.
+    pub fn footprint_seen(&self, p: Point2, exempt: Point2, exempt_radius: f64) -> bool {
+        let g = self.hazard.geometry;
+        let Some((c0, r0)) = g.cell_of(p.x, p.y) else { return false };
+        let steps = (FOOTPRINT_CHECK_M / g.resolution).ceil() as isize;
+        let observed = |c: isize, r: isize| {
+            c >= 0
+                && r >= 0
+                && (c as usize) < g.cols
+                && (r as usize) < g.rows
+                && *self.observed.get(c as usize, r as usize)
+        };
+        for dr in -steps..=steps {
+            for dc in -steps..=steps {
+                let (c, r) = (c0 as isize + dc, r0 as isize + dr);
+                if c < 0 || r < 0 || c as usize >= g.cols || r as usize >= g.rows {
+                    return false;
+                }
+                let (x, y) = g.center(c as usize, r as usize);
+                let q = Point2::new(x, y);
+                if q.dist(p) > FOOTPRINT_CHECK_M || q.dist(exempt) <= exempt_radius {
+                    continue;
+                }
+                if !*self.assessed.get(c as usize, r as usize) {
+                    return false;
+                }
+                if observed(c, r) {
+                    continue;
+                }
+                let seen_around = (-1..=1)
+                    .flat_map(|a| (-1..=1).map(move |b| (a, b)))
+                    .filter(|&(a, b)| (a, b) != (0, 0) && observed(c + a, r + b))
+                    .count();
+                if seen_around < 5 {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Whether the hazard state of the cell containing a point has been assessed from range data.
@@ -208,13 +361,13 @@ impl TerrainModel {
         // A rover that finds itself inside grown hazards (noise, or a late detection) may leave
         // through them at a high cost, but never through an obstacle cell itself; likewise a
         // goal that a nearby rock's grown margin covers stays reachable.
-        let escape_radius = self.growth + g.resolution;
-        let in_grown = |p: Point2| g.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.grown.get(c, r));
-        let (rover_trapped, goal_covered) = (in_grown(rover), in_grown(goal));
+        let escape_radius = self.core_growth + g.resolution;
+        let in_core = |p: Point2| g.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.core.get(c, r));
+        let (rover_trapped, goal_covered) = (in_core(rover), in_core(goal));
         for r in 0..g.rows {
             for c in 0..g.cols {
                 let cell = Cell::new(r, c);
-                if *self.grown.get(c, r) {
+                if *self.core.get(c, r) {
                     let (x, y) = g.center(c, r);
                     let p = Point2::new(x, y);
                     let escapable = !*self.hazard.get(c, r)
@@ -226,11 +379,15 @@ impl TerrainModel {
                     let _ = grid.set_cost(cell, f32::INFINITY);
                     continue;
                 }
-                if mode == CostMode::Traversability && !*self.grown.get(c, r) && grid.is_blocked(cell) {
+                if mode == CostMode::Traversability && !*self.core.get(c, r) && grid.is_blocked(cell) {
                     // MRPTA grades cells "not traversable" from roughness and neighbourhood
                     // too; only the step/slope hazards (grown) are walls, the rest is just
                     // the most expensive terrain, so noise cannot wall the rover in.
                     let _ = grid.set_cost(cell, BLOCKED_GRADE_COST);
+                }
+                if !*self.core.get(c, r) && *self.grown.get(c, r) {
+                    let base = grid.cost(cell);
+                    let _ = grid.set_cost(cell, base.max(1.0) * TIGHT_COST);
                 }
                 if mode == CostMode::Optimistic {
                     grid.set_sensed(cell, *self.assessed.get(c, r));
@@ -251,6 +408,37 @@ impl TerrainModel {
             .into_iter()
             .map(|o| o.vertices)
             .collect()
+    }
+}
+
+/// Growth that keeps a rover driving straight (half its width plus the heading allowance and the
+/// safety buffer) off a hazard.
+fn core_growth(rover: &RoverConfig, safety_buffer: f64) -> f64 {
+    0.5 * rover.width + HEADING_ALLOWANCE + safety_buffer.max(0.0)
+}
+
+/// Marks every cell within `radius` of a set cell of `src` in `dst`.
+fn dilate(src: &Grid2<bool>, radius: f64, dst: &mut Grid2<bool>) {
+    let g = src.geometry;
+    let reach = (radius / g.resolution).ceil() as isize;
+    let r2 = (radius / g.resolution).powi(2);
+    let offsets: Vec<(isize, isize)> = (-reach..=reach)
+        .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+        .filter(|&(dr, dc)| ((dr * dr + dc * dc) as f64) <= r2 + 0.5)
+        .collect();
+    dst.data.iter_mut().for_each(|v| *v = false);
+    for r in 0..g.rows {
+        for c in 0..g.cols {
+            if !*src.get(c, r) {
+                continue;
+            }
+            for &(dr, dc) in &offsets {
+                let (rr, cc) = (r as isize + dr, c as isize + dc);
+                if rr >= 0 && cc >= 0 && (rr as usize) < g.rows && (cc as usize) < g.cols {
+                    *dst.get_mut(cc as usize, rr as usize) = true;
+                }
+            }
+        }
     }
 }
 
@@ -278,6 +466,85 @@ pub fn distance_to_zones(zones: &[Vec<Point2>], p: Point2) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 6 m x 6 m model at 0.1 m around the origin with every cell seen and assessed, and
+    /// hazard cells at the given world points.
+    fn model_with_hazards(points: &[Point2]) -> TerrainModel {
+        let geometry = GridGeometry { cols: 60, rows: 60, resolution: 0.1, origin_x: -3.0, origin_y: -3.0 };
+        let mut m = TerrainModel::new(&RoverConfig::default(), geometry, 0.1);
+        m.assessed.data.iter_mut().for_each(|v| *v = true);
+        m.observed.data.iter_mut().for_each(|v| *v = true);
+        for p in points {
+            let (c, r) = geometry.cell_of(p.x, p.y).unwrap();
+            *m.hazard.get_mut(c, r) = true;
+        }
+        m.grow_hazards();
+        m
+    }
+
+    #[test]
+    fn turning_sweeps_the_body_outline() {
+        // A 0.8 m x 0.6 m rover at the origin facing east. A hazard 0.45 m to its left is clear
+        // of the body (half-width 0.3 + margin) but inside the half-length (0.4 + margin) once
+        // the rover has turned a quarter turn either way.
+        let rover = RoverConfig::default();
+        assert_eq!((rover.length, rover.width), (0.8, 0.6));
+        let m = model_with_hazards(&[Point2::new(0.05, 0.45)]);
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        assert!(m.turn_is_clear(pose, 0.1), "a small turn keeps the side clear");
+        assert!(!m.turn_is_clear(pose, std::f64::consts::FRAC_PI_2));
+        assert!(!m.turn_is_clear(pose, -std::f64::consts::FRAC_PI_2));
+        assert!(!m.can_turn_freely(Point2::new(0.0, 0.0)), "0.45 m is inside the 0.57 m half-diagonal");
+        assert!(m.can_turn_freely(Point2::new(0.0, -0.3)), "0.75 m away the rover turns freely");
+        // Driving east passes it; driving north into it does not.
+        assert!(m.drive_is_clear(pose, 1.0));
+        assert!(!m.drive_is_clear(Pose2::new(0.0, -0.5, std::f64::consts::FRAC_PI_2), 0.6));
+        assert!(m.drive_is_clear(Pose2::new(0.0, -0.5, std::f64::consts::FRAC_PI_2), 0.2));
+    }
+
+    #[test]
+    fn cells_already_under_the_body_do_not_forbid_motion() {
+        // The rover stands over a detection without touching anything: it must still be able
+        // to move off it, or one noisy cell would trap it.
+        let m = model_with_hazards(&[Point2::new(0.1, 0.0)]);
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        assert!(m.turn_is_clear(pose, 1.0));
+        assert!(m.drive_is_clear(pose, -0.5));
+    }
+
+    #[test]
+    fn the_grid_walls_off_half_the_width_and_charges_the_turning_band() {
+        let m = model_with_hazards(&[Point2::new(0.05, 0.05)]);
+        let grid = m.cost_grid(CostMode::Optimistic, Point2::new(-2.5, -2.5), Point2::new(2.5, 2.5));
+        let cost_at = |x: f64| grid.cost_at_point(grid.world_to_grid(Point2::new(x, 0.05)));
+        // Wall: half-width 0.3 + heading allowance 0.07 + buffer 0.1 = 0.47 m.
+        assert!(cost_at(0.05 + 0.4).is_infinite());
+        // Band: out to the radius 0.5 + buffer 0.1 = 0.6 m.
+        assert_eq!(cost_at(0.05 + 0.55), TIGHT_COST);
+        assert_eq!(cost_at(0.05 + 0.8), 1.0);
+    }
+
+    #[test]
+    fn the_footprint_must_have_been_seen() {
+        let mut m = model_with_hazards(&[]);
+        let g = m.observed.geometry;
+        let p = Point2::new(1.0, 1.0);
+        let (c, r) = g.cell_of(p.x, p.y).unwrap();
+        // A one-cell gap in the points is sampling, not a hiding place for a rock.
+        *m.observed.get_mut(c, r) = false;
+        assert!(m.footprint_seen(p, Point2::new(-2.0, -2.0), 0.4));
+        // A 3 x 3 hole (0.3 m) can hide a rock the rover cannot straddle.
+        for dr in 0..3 {
+            for dc in 0..3 {
+                *m.observed.get_mut(c + dc - 1, r + dr - 1) = false;
+            }
+        }
+        assert!(!m.footprint_seen(p, Point2::new(-2.0, -2.0), 0.4));
+        // ... unless it lies under the rover, which its cameras cannot see.
+        assert!(m.footprint_seen(p, p, 0.4));
+        // A hole 0.5 m away is outside the footprint check.
+        assert!(m.footprint_seen(Point2::new(1.5, 1.0), Point2::new(-2.0, -2.0), 0.4));
+    }
 
     #[test]
     fn zone_distance_is_zero_inside_and_euclidean_outside() {

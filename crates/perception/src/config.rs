@@ -35,6 +35,23 @@ impl Default for DensityConfig {
     }
 }
 
+/// The height of a cell the step/slope hazard model sees.
+///
+/// A cell straddling a rock's edge holds points on the rock and on the ground around it, and
+/// range noise smears a small rock's top over its neighbours: the cell mean then loses part of
+/// the rock's height, and a rock just taller than the clearance measures just under it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum HazardHeight {
+    /// The mean of the cell's points (paper 004's elevation cell).
+    #[default]
+    Mean,
+    /// The mean plus the spread of the points beyond the sensor noise, capped at the highest
+    /// point: a cell half on a rock of height h reads about h, a flat noisy cell reads its mean.
+    Top,
+    /// The highest point (noise then biases every cell upwards).
+    Max,
+}
+
 /// Everything terrain assessment needs: grid size, hazard limits and C-obstacle growth.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainConfig {
@@ -70,10 +87,8 @@ pub struct TerrainConfig {
     pub max_arc_step: f64,
     /// Point-density check in front of the rover.
     pub density: DensityConfig,
-    /// Run the step/slope hazard model on each cell's highest point instead of its mean: a
-    /// rock narrower than two cells loses much of its height in a cell mean, so navigators
-    /// that must never touch a rock use the maximum (range noise then errs on the safe side).
-    pub hazards_from_cell_max: bool,
+    /// Which height of each cell the step/slope hazard model runs on.
+    pub hazard_height: HazardHeight,
 }
 
 impl Default for TerrainConfig {
@@ -94,7 +109,7 @@ impl TerrainConfig {
             footprint_radius: rover.radius(),
             min_window_fraction: 0.25,
             min_points_per_cell: 1,
-            hazards_from_cell_max: false,
+            hazard_height: HazardHeight::Mean,
             cell_roughness_limit: rover.clearance / 3.0,
             footprint_roughness_limit: rover.clearance / 2.0,
             // Typical stereo/LIDAR height noise at a few metres.

@@ -10,7 +10,7 @@
 use crate::PerceptionError;
 use crate::cell::CellStats;
 use crate::cobstacle::{CObstacle, SensedWedge, build_c_obstacles, label_c_obstacles};
-use crate::config::TerrainConfig;
+use crate::config::{HazardHeight, TerrainConfig};
 use crate::elevation::world_points;
 use crate::footprint::analyse_footprints;
 use crate::goodness::goodness_layer;
@@ -94,10 +94,21 @@ pub fn assess_cells<'a>(
     let counts: Vec<u32> = stats.iter().map(|c| c.count).collect();
 
     let (cols, rows, res) = (geometry.cols, geometry.rows, geometry.resolution);
-    let hazard_heights: Vec<f32> = if config.hazards_from_cell_max {
-        stats.iter().map(|c| if c.count > 0 { c.max_z } else { f32::NAN }).collect()
-    } else {
-        heights.clone()
+    let noise_var = config.sensor_noise * config.sensor_noise;
+    let hazard_heights: Vec<f32> = match config.hazard_height {
+        HazardHeight::Mean => heights.clone(),
+        HazardHeight::Max => stats.iter().map(|c| if c.count > 0 { c.max_z } else { f32::NAN }).collect(),
+        HazardHeight::Top => stats
+            .iter()
+            .zip(&heights)
+            .map(|(c, &mean)| match c.variance() {
+                Some(var) if c.count > 1 => {
+                    let top = mean as f64 + (var - noise_var).max(0.0).sqrt();
+                    top.min(c.max_z as f64) as f32
+                }
+                _ => mean,
+            })
+            .collect(),
     };
     let footprint = analyse_footprints(&hazard_heights, cols, rows, res, &config.footprint_params());
     let traversability =
@@ -275,5 +286,60 @@ impl TerrainEvaluator {
                 density,
                 required,
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 15 x 15 grid of 0.1 m cells of flat ground at z = 0, sampled by 16 points per cell with
+    /// +-`noise` alternating, and one cell at (7, 7) whose points are half on a rock top at
+    /// `rock` m and half on the ground (a cell straddling a small rock's edge).
+    fn straddled_rock(rock: f64, noise: f64) -> Vec<CellStats> {
+        let mut cells = vec![CellStats::EMPTY; 15 * 15];
+        for (i, cell) in cells.iter_mut().enumerate() {
+            for k in 0..16 {
+                let (dx, dy) = (-0.04 + 0.025 * (k % 4) as f64, -0.04 + 0.025 * (k / 4) as f64);
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                let z = if i == 7 * 15 + 7 && k >= 8 { rock } else { sign * noise };
+                cell.add(dx, dy, z);
+            }
+        }
+        cells
+    }
+
+    fn hazard_at_rock(height: HazardHeight, rock: f64, noise: f64) -> bool {
+        let geometry = GridGeometry { cols: 15, rows: 15, resolution: 0.1, origin_x: 0.0, origin_y: 0.0 };
+        let config = TerrainConfig {
+            resolution: 0.1,
+            clearance: 0.15,
+            footprint_radius: 0.5,
+            sensor_noise: 0.01,
+            hazard_height: height,
+            ..TerrainConfig::default()
+        };
+        let cells = straddled_rock(rock, noise);
+        let layers = assess_cells(geometry, cells.iter(), (7, 7), Pose2::new(0.75, 0.75, 0.0), &config);
+        layers.hazard.data.iter().any(|&h| h)
+    }
+
+    #[test]
+    fn top_height_sees_a_rock_the_cell_mean_halves() {
+        // A 0.17 m rock over a 0.15 m clearance: the mixed cell's mean reads 0.085 m, its top
+        // (mean + spread) reads the rock's 0.17 m.
+        assert!(!hazard_at_rock(HazardHeight::Mean, 0.17, 0.0));
+        assert!(hazard_at_rock(HazardHeight::Top, 0.17, 0.0));
+        assert!(hazard_at_rock(HazardHeight::Max, 0.17, 0.0));
+        // A 0.13 m rock is below the clearance whatever the estimate.
+        assert!(!hazard_at_rock(HazardHeight::Top, 0.13, 0.0));
+    }
+
+    #[test]
+    fn top_height_discounts_noise_on_flat_ground() {
+        // Flat ground with +-1 cm noise (the configured sensor noise) and a rock below the
+        // clearance: the spread is all noise, so the top stays near the mean.
+        assert!(!hazard_at_rock(HazardHeight::Top, 0.13, 0.01));
+        assert!(hazard_at_rock(HazardHeight::Top, 0.17, 0.01));
     }
 }

@@ -123,6 +123,35 @@ fn clear_pads_have_bare_ground() {
 }
 
 #[test]
+fn clear_pads_are_outside_crater_bowls_and_rims() {
+    // With craters switched off the ground is the same relief; under a pad, craters may add
+    // only distant ejecta (at most ~1 % of the largest diameter), never a bowl (-0.2 D).
+    let largest = MarsYardParams::default().crater_max_diameter_m;
+    for seed in 1..=40 {
+        let params = MarsYardParams { crater_density: 0.02, ..MarsYardParams::with_seed(seed) }
+            .clear_around(4.0, 4.0, 1.0)
+            .clear_around(19.0, 19.0, 1.0);
+        let with = generate_ground(&params);
+        let without = generate_ground(&MarsYardParams { crater_density: 0.0, ..params.clone() });
+        let g = with.geometry();
+        for pad in &params.clear_pads {
+            for row in 0..g.rows {
+                for col in 0..g.cols {
+                    let (x, y) = g.center(col, row);
+                    if (x - pad.x).hypot(y - pad.y) < pad.radius {
+                        let dz = (with.heights.get(col, row) - without.heights.get(col, row)).abs() as f64;
+                        assert!(
+                            dz <= 0.0106 * largest,
+                            "seed {seed} pad {pad:?}: crater changes height by {dz}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn regional_slope_is_the_fitted_plane() {
     let params = MarsYardParams {
         width_m: 20.0,

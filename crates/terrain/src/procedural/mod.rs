@@ -155,6 +155,10 @@ impl Crater {
     }
 }
 
+/// Distance, in crater radii, a crater's centre keeps from a clear pad's edge: beyond 1.5 radii
+/// the ejecta rises at most 1 % of the diameter.
+const PAD_CRATER_CLEARANCE: f64 = 1.5;
+
 /// Ejecta blanket radius in crater radii.
 const CRATER_REACH: f64 = 2.5;
 
@@ -207,16 +211,8 @@ const STREAM_ROCKS: u64 = 2;
 
 /// The ground of a yard (relief, ridges, slope, craters) without rocks.
 pub fn generate_ground(params: &MarsYardParams) -> Dem {
-    let mut res =
-        if params.resolution.is_finite() && params.resolution > 0.0 { params.resolution } else { 0.05 };
-    let width = if params.width_m.is_finite() { params.width_m.max(res) } else { res };
-    let height = if params.height_m.is_finite() { params.height_m.max(res) } else { res };
-    while (width / res).round() * (height / res).round() > MAX_GENERATED_CELLS as f64 {
-        res *= 2.0;
-    }
-    let cols = ((width / res).round() as usize).max(1);
-    let rows = ((height / res).round() as usize).max(1);
-    let geometry = GridGeometry { cols, rows, resolution: res, origin_x: 0.0, origin_y: 0.0 };
+    let geometry = ground_geometry(params);
+    let (cols, rows, res) = (geometry.cols, geometry.rows, geometry.resolution);
 
     let relief_seed = sub_seed(params.seed, 11);
     let ridge_seed = sub_seed(params.seed, 12);
@@ -258,10 +254,40 @@ pub fn generate_ground(params: &MarsYardParams) -> Dem {
         nodata: None,
         geo: GeoReference { crs: "local (procedural Mars yard)".into(), easting: 0.0, northing: 0.0 },
     };
-    let area = LocalRect::from_corner_size(0.0, 0.0, geometry.width_m(), geometry.height_m());
-    let craters = sample_craters(params, area, &mut stream(params.seed, STREAM_CRATERS));
+    let mut craters = yard_craters(params);
+    // A pad is where a rover stands or must arrive: a crater bowl or steep inner rim there would
+    // make the mission infeasible from the start. Dropping after sampling keeps every other
+    // crater where the seed put it.
+    craters.retain(|c| {
+        params
+            .clear_pads
+            .iter()
+            .all(|p| (c.x - p.x).hypot(c.y - p.y) >= p.radius + PAD_CRATER_CLEARANCE * 0.5 * c.diameter)
+    });
     add_craters(&mut dem, &craters);
     dem
+}
+
+/// The grid of a yard's DEM: the requested size and resolution, coarsened until it fits
+/// [`MAX_GENERATED_CELLS`].
+fn ground_geometry(params: &MarsYardParams) -> GridGeometry {
+    let mut res =
+        if params.resolution.is_finite() && params.resolution > 0.0 { params.resolution } else { 0.05 };
+    let width = if params.width_m.is_finite() { params.width_m.max(res) } else { res };
+    let height = if params.height_m.is_finite() { params.height_m.max(res) } else { res };
+    while (width / res).round() * (height / res).round() > MAX_GENERATED_CELLS as f64 {
+        res *= 2.0;
+    }
+    let cols = ((width / res).round() as usize).max(1);
+    let rows = ((height / res).round() as usize).max(1);
+    GridGeometry { cols, rows, resolution: res, origin_x: 0.0, origin_y: 0.0 }
+}
+
+/// Every crater the seed puts on a yard, before those overlapping a clear pad are dropped.
+pub fn yard_craters(params: &MarsYardParams) -> Vec<Crater> {
+    let g = ground_geometry(params);
+    let area = LocalRect::from_corner_size(0.0, 0.0, g.width_m(), g.height_m());
+    sample_craters(params, area, &mut stream(params.seed, STREAM_CRATERS))
 }
 
 /// Adds crater profiles to a DEM (superposed).
