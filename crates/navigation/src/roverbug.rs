@@ -24,12 +24,16 @@
 //!   by more than two metres;
 //! * besides the recorded parameters (`d_LEAVE`, `d_reach`, `V_loop`), the C-obstacles of the
 //!   last view within reach of the rover are carried to the next one (the mast is blind within
-//!   a metre), and hazard contacts are recorded as small C-obstacles;
+//!   a metre), and hazard contacts and stops at the edge of the terrain are recorded as small
+//!   C-obstacles; after one the rover backs out along the ground it just crossed;
+//! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
+//!   leave across the margin but never across the obstacle's own hull; inside a hull itself
+//!   (a crater rim around it) it has no free way out;
 //! * when normal boundary following has turned the gaze all around without a boundary vertex
 //!   in the interior of the conglomerate wedge (the paper aborts), it steps to the most extreme
 //!   directly reachable node not yet visited, and asks for help only when there is none.
 //!
-//! Goal keep-out polygons are not used.
+//! Mission keep-out polygons are C-obstacles like sensed ones (their hulls, grown alike).
 
 use crate::terrain_model::HAZARD_MARGIN;
 use rovernav_core::{
@@ -43,6 +47,9 @@ use std::f64::consts::PI;
 /// Tunable parameters of RoverBug.
 #[derive(Clone, Debug)]
 pub struct RoverBugConfig {
+    /// Empirical safety buffer added to the rover radius when growing C-obstacles (m; paper 000
+    /// section 2).
+    pub safety_buffer: f64,
     /// Buffer left inside the wedge's far radius when a path is truncated (m).
     pub range_buffer: f64,
     /// Heading error above which the rover turns in place before driving (rad).
@@ -65,6 +72,7 @@ pub struct RoverBugConfig {
 impl Default for RoverBugConfig {
     fn default() -> Self {
         Self {
+            safety_buffer: 0.1,
             range_buffer: 1.0,
             turn_threshold: 10f64.to_radians(),
             leave_margin: 0.1,
@@ -125,6 +133,8 @@ pub struct RoverBug {
     contacts: Vec<CObstacle>,
     /// Sign of the last motion: 1 forward, -1 reverse, 2 turn in place.
     last_motion: Option<f64>,
+    /// Where the last forward drive started (estimate).
+    drive_from: Option<Point2>,
     /// Positions of the current boundary-following segment.
     visited: Vec<Point2>,
     waypoints: VecDeque<Point2>,
@@ -147,6 +157,7 @@ impl RoverBug {
             rows: 81,
             clearance: rover.clearance * HAZARD_MARGIN,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
+            safety_buffer: config.safety_buffer,
             ..TerrainConfig::for_rover(&rover)
         };
         Self {
@@ -161,6 +172,7 @@ impl RoverBug {
             visited: Vec::new(),
             contacts: Vec::new(),
             last_motion: None,
+            drive_from: None,
             waypoints: VecDeque::new(),
             subpath: Vec::new(),
             finish: None,
@@ -254,22 +266,26 @@ impl RoverBug {
         (0..=n).all(|i| self.visible_or_beyond_cut(a.add(b.sub(a).scale(i as f64 / n as f64))))
     }
 
-    /// Whether segment a-b is free of every C-obstacle interior (an obstacle that contains `x`,
-    /// where noise or a late detection put the rover, does not block segments leaving `x`).
+    /// Whether segment a-b is free of every C-obstacle interior. The rover at `x` may find
+    /// itself in a C-obstacle's grown margin (range noise, a late detection): segments leaving
+    /// `x` may then cross the margin but never the obstacle's own hull; from inside a recorded
+    /// contact (no cells) they may move out or along, never deeper in. Inside a hull itself (a
+    /// crater rim around the rover) every way out crosses the hazard, so none is free.
     fn segment_free(&self, a: Point2, b: Point2, x: Point2) -> bool {
         self.obstacles.iter().all(|o| {
             if !o.blocks_segment(a, b) {
                 return true;
             }
-            // From inside a C-obstacle (noise, a late detection) the rover may leave it; from
-            // inside a recorded contact (no cells) it may move out or along, never deeper in.
+            let along = |k: usize| a.add(b.sub(a).scale(k as f64 / 16.0));
             a == x
                 && o.contains_strict(x)
-                && (o.cells > 0 || {
+                && !o.hull_contains_strict(x)
+                && if o.cells > 0 {
+                    (1..=16).all(|k| !o.hull_contains_strict(along(k)))
+                } else {
                     let depth = -o.signed_clearance(x);
-                    (1..=8)
-                        .all(|k| -o.signed_clearance(a.add(b.sub(a).scale(k as f64 / 8.0))) <= depth + 0.05)
-                })
+                    (1..=16).all(|k| -o.signed_clearance(along(k)) <= depth + 0.05)
+                }
         })
     }
 
@@ -837,7 +853,9 @@ impl Navigator for RoverBug {
         }
         if let Some(why) = &input.frame.motion_stopped {
             self.waypoints.clear();
-            if why.starts_with("hazard") && !self.backing_out {
+            // The edge of the terrain stops the wheels like a hazard does: both are recorded.
+            let blocked = why.starts_with("hazard") || why.starts_with("left the terrain");
+            if blocked && !self.backing_out {
                 // Record where the body met the terrain (paper: explicitly recorded points may
                 // pass between steps), so no later subpath leads there again.
                 let half = 0.5 * self.rover.length;
@@ -854,12 +872,21 @@ impl Navigator for RoverBug {
                 }
                 let here = self.contacts.iter().filter(|o| o.hull.iter().any(|h| h.dist(x) < 0.6)).count();
                 if here >= self.config.max_contacts_here {
-                    return self
-                        .finish_now(Outcome::HelpRequested, "repeated hazard contacts at the same place");
+                    return self.finish_now(
+                        Outcome::HelpRequested,
+                        "repeated hazard contacts or terrain-edge stops at the same place",
+                    );
                 }
+                // Back out along the ground the wheels just crossed: reversing farther than the
+                // drive went (after a turn in place, hardly at all) leads onto ground the body
+                // has not covered.
+                let back = match (self.last_motion, self.drive_from) {
+                    (Some(sign), Some(from)) if sign > 0.0 && sign < 2.0 => x.dist(from).clamp(0.1, 0.3),
+                    _ => 0.3,
+                };
                 self.backing_out = true;
                 self.last_motion = Some(-1.0);
-                return NavCommand::Drive { distance: -0.3, curvature: 0.0, guard: DriveGuard::default() };
+                return NavCommand::Drive { distance: -back, curvature: 0.0, guard: DriveGuard::default() };
             }
         }
         self.backing_out = false;
@@ -907,6 +934,7 @@ impl Navigator for RoverBug {
             let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
             let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
             self.last_motion = Some(1.0);
+            self.drive_from = Some(x);
             return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
         }
         // Subpath done: a goal vertex reached, or a new step.
@@ -972,6 +1000,41 @@ mod tests {
         let len: f64 = pts.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>() + pts.last().unwrap().dist(goal);
         let expect = 2.0f64.hypot(0.5) + 1.0 + 1.0f64.hypot(0.5);
         assert!((len - expect).abs() < 1e-3, "{len} vs {expect}: {pts:?}");
+    }
+
+    #[test]
+    fn from_a_margin_the_rover_may_cross_the_margin_but_not_the_hull() {
+        // Hull [1,2]x[-0.5,0.5] grown by 0.6: the rover at (0.6, 0) is 0.4 m from the hull, in
+        // the margin. Sideways or back it never crosses the hull; straight on it does.
+        let hull = vec![
+            Point2::new(1.0, -0.5),
+            Point2::new(2.0, -0.5),
+            Point2::new(2.0, 0.5),
+            Point2::new(1.0, 0.5),
+        ];
+        let bug = bug_with(vec![CObstacle::from_hull(hull, 0.6, 30f64.to_radians(), 4)]);
+        let x = Point2::new(0.6, 0.0);
+        assert!(bug.obstacles[0].contains_strict(x));
+        assert!(bug.segment_free(x, Point2::new(-1.0, 0.0), x));
+        assert!(bug.segment_free(x, Point2::new(0.6, -3.0), x));
+        assert!(!bug.segment_free(x, Point2::new(3.0, 0.0), x));
+        // The same segments from anywhere but the rover's position are blocked.
+        assert!(!bug.segment_free(x, Point2::new(0.6, -3.0), Point2::new(-1.0, 0.0)));
+        // Inside the hull itself every way out crosses the hazard.
+        let inside = Point2::new(1.5, 0.0);
+        assert!(!bug.segment_free(inside, Point2::new(1.5, -3.0), inside));
+        assert!(!bug.segment_free(inside, Point2::new(-1.0, 0.0), inside));
+    }
+
+    #[test]
+    fn from_a_recorded_contact_the_rover_may_not_go_deeper() {
+        // A contact at the origin grown by 0.6; the rover 0.3 m east of it backs away freely but
+        // may not drive across the contact point.
+        let contact = CObstacle::from_hull(vec![Point2::new(0.0, 0.0)], 0.6, 30f64.to_radians(), 0);
+        let bug = bug_with(vec![contact]);
+        let x = Point2::new(0.3, 0.0);
+        assert!(bug.segment_free(x, Point2::new(2.0, 0.0), x));
+        assert!(!bug.segment_free(x, Point2::new(-2.0, 0.0), x));
     }
 
     #[test]

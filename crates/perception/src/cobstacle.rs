@@ -142,6 +142,17 @@ impl CObstacle {
         }
     }
 
+    /// Whether `p` lies strictly inside the obstacle's own convex hull (not just in the margin
+    /// it was grown by). A hull of fewer than three points has no inside.
+    pub fn hull_contains_strict(&self, p: Point2) -> bool {
+        let n = self.hull.len();
+        n >= 3
+            && (0..n).all(|i| {
+                let (a, b) = (self.hull[i], self.hull[(i + 1) % n]);
+                b.sub(a).cross(p.sub(a)) > EPS
+            })
+    }
+
     /// Whether the goal vertex labels are set (the goal lies inside this obstacle).
     pub fn is_goal_obstacle(&self) -> bool {
         self.labels.first().is_some_and(|l| l.goal)
@@ -399,6 +410,17 @@ mod tests {
         // Along the diagonal: crosses.
         assert!(o.blocks_segment(Point2::new(-1.0, 2.0), Point2::new(2.0, -1.0)));
         assert!(o.clip_segment(Point2::new(-1.0, 3.0), Point2::new(3.0, 3.0)).is_none());
+    }
+
+    #[test]
+    fn hull_containment_excludes_the_grown_margin() {
+        let o = CObstacle::from_hull(square(), 0.5, 30f64.to_radians(), 1);
+        // Inside the unit square, on its edge, and in the 0.5 m margin around it.
+        assert!(o.hull_contains_strict(Point2::new(0.5, 0.5)));
+        assert!(!o.hull_contains_strict(Point2::new(1.0, 0.5)));
+        assert!(!o.hull_contains_strict(Point2::new(1.3, 0.5)) && o.contains(Point2::new(1.3, 0.5)));
+        let point = CObstacle::from_hull(vec![Point2::new(0.0, 0.0)], 0.5, 30f64.to_radians(), 0);
+        assert!(!point.hull_contains_strict(Point2::new(0.0, 0.0)));
     }
 
     #[test]
