@@ -462,6 +462,15 @@ pub(crate) fn algorithms(
                 known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
             }
         })?;
+    // A map-matching localiser needs views back over the terrain crossed (issue 5 item 5).
+    let look_back = rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
+    let navigator: Box<dyn Navigator> = if rovernav_localization::matches_terrain(&mission.localizer)
+        && !mission.navigator.ends_with(look_back)
+    {
+        Box::new(rovernav_navigation::look_back::LookBack::new(navigator, Default::default()))
+    } else {
+        navigator
+    };
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
     let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
         .ok_or_else(|| RunError::UnknownLocalizer {

@@ -6,9 +6,13 @@
 //! rover's own map: no ground truth). When a new set of clouds arrives after the rover has moved
 //! at least [`EkfMlParams::min_travel`] since the last match, those clouds alone make a levelled
 //! rover-frame local map, which is matched against the part of the accumulated map around the
-//! estimate, in a search window of [`EkfMlParams::window_sigmas`] standard deviations of the EKF
-//! covariance. A match whose failure probability is low and whose best pose is not on the
-//! window's edge is fused as a position and heading fix; the others are counted and dropped.
+//! estimate, in a search window covering the drift since that part of the map was made (at
+//! most [`EkfMlParams::window_sigmas`] standard deviations of the EKF covariance). A match
+//! whose failure probability is low, whose position sigma is below
+//! [`EkfMlParams::max_fix_sigma`] and whose best pose is not on the window's edge is fused as a
+//! position and heading fix; the others are counted and dropped (issue 5 item 5: a failed or
+//! uncertain match is reported, not used). The navigators supply the views back over the
+//! terrain just crossed through `rovernav_navigation::look_back`.
 //!
 //! The map was placed with earlier estimates, so a fix measures the pose relative to the map: it
 //! removes the drift since the map was made but not the map's own placement error. After a fix
@@ -44,6 +48,9 @@ pub struct EkfMlParams {
     /// Window half-width growth per metre driven since the last fix (m/m): the filter's
     /// covariance does not model systematic slip, which the window must still cover.
     pub window_growth: f64,
+    /// Travel (m) over which the map under a new view was made: the drift the window must
+    /// cover is the drift since then, not since the start (see [`EkfMl`]'s window).
+    pub match_horizon: f64,
     /// Unmodelled slip per metre driven (fraction, one sigma), added to the filter's position
     /// variance each update.
     pub slip_fraction: f64,
@@ -71,11 +78,12 @@ impl Default for EkfMlParams {
             min_window_xy: 0.2,
             max_window_xy: 1.5,
             window_growth: 0.1,
+            match_horizon: 5.0,
             slip_fraction: 0.05,
             min_window_yaw: 0.03,
             max_window_yaw: 0.15,
             max_failure_probability: 0.5,
-            max_fix_sigma: 0.15,
+            max_fix_sigma: 0.3,
             min_local_cells: 300,
             matcher: MlParams {
                 max_local_cells: Some(2000),
@@ -273,15 +281,19 @@ impl EkfMl {
     /// The search window for the current estimate.
     fn window(&self, estimate: &PoseEstimate) -> SearchWindow {
         let p = &self.params;
-        let min_xy = p.min_window_xy + p.window_growth * self.travel_since_fix;
-        let mut w = SearchWindow::from_estimate(estimate, p.window_sigmas, min_xy, p.min_window_yaw);
-        w.half_x = w.half_x.min(p.max_window_xy);
-        w.half_y = w.half_y.min(p.max_window_xy);
+        // The map under a view was placed with the estimate of a few metres ago, so a match
+        // measures only the drift since then: the window covers that relative drift (growing
+        // with the travel since the last fix, up to the horizon over which the map under the
+        // view was made), not the filter's absolute uncertainty, which grows without bound
+        // and would make every window large and every match ambiguous.
+        let relative = p.min_window_xy + p.window_growth * self.travel_since_fix.min(p.match_horizon);
+        let mut w = SearchWindow::from_estimate(estimate, p.window_sigmas, relative, p.min_window_yaw);
+        w.half_x = w.half_x.min(relative).min(p.max_window_xy);
+        w.half_y = w.half_y.min(relative).min(p.max_window_xy);
         w.half_yaw = w.half_yaw.min(p.max_window_yaw);
         w
     }
 
-    /// Matches the clouds against the map and fuses the fix when it is trustworthy.
     fn try_fix(&mut self, clouds: &[PointCloud], estimate: &PoseEstimate) {
         let p = self.params;
         let level = Pose3 { roll: estimate.pose.roll, pitch: estimate.pose.pitch, ..Default::default() };

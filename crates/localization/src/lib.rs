@@ -36,6 +36,12 @@ use rovernav_core::{Localizer, Pose3, RoverConfig};
 /// Names accepted by [`localizer_by_name`].
 pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf", "ekf-ml"];
 
+/// Whether the named localiser corrects its pose by terrain-map matching (and so wants the
+/// navigator to look back over the terrain it crossed).
+pub fn matches_terrain(name: &str) -> bool {
+    name == "ekf-ml"
+}
+
 /// Builds a localiser by registry name, or `None` for an unknown name.
 pub fn localizer_by_name(name: &str, config: &RoverConfig, initial: Pose3) -> Option<Box<dyn Localizer>> {
     match name {

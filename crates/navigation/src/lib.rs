@@ -7,6 +7,7 @@
 
 pub mod gestalt;
 pub mod grid_nav;
+pub mod look_back;
 pub mod nat;
 pub mod roverbug;
 pub mod sr2;
@@ -22,7 +23,14 @@ pub const NAVIGATOR_NAMES: [&str; 7] =
     ["astar-grid", "mrpta", "gestalt", "gestalt+field-dstar", "sr2", "nat", "roverbug"];
 
 /// A fresh navigator by registry name, or `None` if the name is unknown.
+///
+/// Any name followed by [`look_back::LOOK_BACK_SUFFIX`] ("+look-back") is that navigator
+/// wrapped in [`look_back::LookBack`].
 pub fn navigator_by_name(name: &str, rover: &RoverConfig) -> Option<Box<dyn Navigator>> {
+    if let Some(base) = name.strip_suffix(look_back::LOOK_BACK_SUFFIX) {
+        let inner = navigator_by_name(base, rover)?;
+        return Some(Box::new(look_back::LookBack::new(inner, Default::default())));
+    }
     match name {
         "astar-grid" => Some(Box::new(GridNavigator::new(
             "astar-grid",

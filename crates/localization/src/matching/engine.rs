@@ -23,6 +23,9 @@
 //! - Local cells over unknown parts of the global map score a neutral constant instead of the
 //!   outlier density: the paper's choice biases matches towards maximum overlap (measured: 10-20
 //!   cm downrange bias between consecutive stereo views).
+//! - That neutral score can be each local cell's own background, its mean score at misaligned
+//!   poses ([`Scorer::use_background_neutral`]): smooth ground, which scores well anywhere,
+//!   then counts for nothing, and only cells that discriminate poses pull the match.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -176,6 +179,18 @@ impl VoxelMap {
             return self.cap;
         }
         self.squared[(layer as usize * self.rows + row as usize) * self.cols + col as usize]
+    }
+
+    /// Squared distance (cells^2, capped) from the column containing a world point to the
+    /// nearest column where the global map is unknown: 0 over unknown ground or off the map.
+    pub fn squared_distance_to_unknown(&self, x: f64, y: f64) -> u16 {
+        let inv = 1.0 / self.resolution;
+        let col = ((x - self.origin_x) * inv).floor() as i64;
+        let row = ((y - self.origin_y) * inv).floor() as i64;
+        if col < 0 || row < 0 || col >= self.cols as i64 || row >= self.rows as i64 {
+            return 0;
+        }
+        self.to_unknown[row as usize * self.cols + col as usize]
     }
 }
 
@@ -432,8 +447,8 @@ pub struct Scorer<'a, S: DistanceScore> {
     roots: Vec<f64>,
     /// Half-width (voxels) of the padding around the occupied part of the voxel map.
     pad: f64,
-    /// Score of a local cell over an unknown part of the global map.
-    neutral: f64,
+    /// Per local cell: its score over an unknown part of the global map.
+    neutral: Vec<f64>,
     /// How cells are bounded.
     bound_kind: BoundKind,
     /// How cells are split.
@@ -468,7 +483,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             bound,
             roots,
             pad: cap_d.floor() + 1.0,
-            neutral: score.score(neutral_distance),
+            neutral: vec![score.score(neutral_distance); cells.len()],
             bound_kind,
             split,
             _score: std::marker::PhantomData,
@@ -522,7 +537,45 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 Some(layer) => self.exact[v.squared[layer + cell] as usize],
                 None => self.exact[v.cap as usize],
             },
-            _ => self.neutral,
+            _ => self.neutral[i],
+        }
+    }
+
+    /// Replaces each local cell's neutral score by its background score: the mean of its
+    /// exact scores, over known global columns, at poses displaced from the window's centre
+    /// by `radii` lattice steps in eight directions (keeping the constant neutral where it
+    /// never lands on known ground).
+    ///
+    /// Why: a cell of smooth ground scores near the maximum wherever it is placed over known
+    /// terrain, so with any constant neutral score the sum rewards overlap rather than
+    /// alignment, and consecutive forward views are pulled towards each other (measured: 10-30
+    /// cm downrange bias on the simulator's stereo). Scoring each cell against its own
+    /// misaligned expectation makes the sum a log-likelihood ratio against a random placement:
+    /// uninformative cells count about zero wherever they land, informative ones (rocks, edges)
+    /// count for alignment. The search stays exact: bounds use the same per-cell neutral.
+    pub fn use_background_neutral(&mut self, radii: &[i32]) {
+        let n = self.cells.len();
+        let mut sum = vec![0.0; n];
+        let mut count = vec![0u32; n];
+        let v = self.voxels;
+        for &radius in radii {
+            for (dx, dy) in [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1)] {
+                let index = [dx * radius, dy * radius, 0];
+                self.for_each_column(index, |i, column| {
+                    if let Some(cell) = column.filter(|&c| v.known[c]) {
+                        sum[i] += match self.cells.layer_offset[i] {
+                            Some(layer) => self.exact[v.squared[layer + cell] as usize],
+                            None => self.exact[v.cap as usize],
+                        };
+                        count[i] += 1;
+                    }
+                });
+            }
+        }
+        for ((neutral, s), c) in self.neutral.iter_mut().zip(sum).zip(count) {
+            if c > 0 {
+                *neutral = s / f64::from(c);
+            }
         }
     }
 
@@ -579,7 +632,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 // `pad` voxels inside the grid's edges.
                 let d = self.pad - f64::from(pooled_half) - delta;
                 let step = (d.max(0.0) * BOUND_STEPS_PER_CELL) as usize;
-                sum += self.bound[step.min(self.bound.len() - 1)].max(self.neutral);
+                sum += self.bound[step.min(self.bound.len() - 1)].max(self.neutral[i]);
                 return;
             };
             let known_bound = match self.cells.layer_offset[i] {
@@ -594,7 +647,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             // Any pose of the box that puts the cell over an unknown column scores neutral.
             let reach = translation_reach + rotation_fixed + rotation_per_radius * radius;
             let may_be_unknown = !v.known[cell] || f64::from(v.to_unknown[cell]) <= reach * reach + 1e-9;
-            sum += if may_be_unknown { known_bound.max(self.neutral) } else { known_bound };
+            sum += if may_be_unknown { known_bound.max(self.neutral[i]) } else { known_bound };
         });
         sum
     }

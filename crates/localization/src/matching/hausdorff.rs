@@ -9,7 +9,7 @@
 
 use rovernav_core::Grid2;
 
-use super::elevation::high_pass;
+use super::elevation::high_pass_mean;
 use super::engine::{
     BoundKind, DistanceScore, LocalCells, MatchDetails, PeakAnalysis, Scorer, SplitRule, VoxelMap, run_match,
 };
@@ -82,7 +82,7 @@ impl HausdorffMatcher {
             }
         }
         let voxels = VoxelMap::new(
-            &high_pass(global, params.high_pass_window),
+            &high_pass_mean(global, params.high_pass_window),
             params.tolerance_cells.ceil() as u32 + 1,
             params.vertical_exaggeration,
             super::ml::pool_levels(params.bound),
@@ -122,7 +122,8 @@ impl HausdorffMatcher {
         exhaustive: bool,
     ) -> Result<MatchDetails, MatchError> {
         window.validate()?;
-        let cells = LocalCells::new(&high_pass(local, self.params.high_pass_window), &self.voxels, None)?;
+        let cells =
+            LocalCells::new(&high_pass_mean(local, self.params.high_pass_window), &self.voxels, None)?;
         let mut scorer = Scorer::new(
             &self.voxels,
             &cells,
