@@ -189,7 +189,14 @@ impl GestaltNavigator {
             origin_x: x0 - m,
             origin_y: y0 - m,
         };
-        self.terrain = Some(TerrainModel::new(&self.rover, geometry, self.config.safety_buffer));
+        self.terrain = Some(TerrainModel::with_hazard_height(
+            &self.rover,
+            geometry,
+            self.config.safety_buffer,
+            // Its arc evaluation treats every grown hazard as a wall, so the denser map of
+            // top heights (tuned for the grid planners' graded costs) boxes it in.
+            rovernav_perception::HazardHeight::Mean,
+        ));
     }
 
     /// Hazard vote of the path of poses (0 = vetoed): the worst goodness swept, with the end

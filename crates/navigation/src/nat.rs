@@ -231,7 +231,14 @@ impl Navigator for NatNavigator {
                 origin_x: x0,
                 origin_y: y0,
             };
-            self.terrain = Some(TerrainModel::new(&self.rover, geometry, self.config.safety_buffer));
+            self.terrain = Some(TerrainModel::with_hazard_height(
+                &self.rover,
+                geometry,
+                self.config.safety_buffer,
+                // Its arc evaluation treats every grown hazard as a wall, so the denser map of
+                // top heights (tuned for the grid planners' graded costs) boxes it in.
+                rovernav_perception::HazardHeight::Mean,
+            ));
         }
         let d = here.dist(goal);
         if d <= input.goal.tolerance {

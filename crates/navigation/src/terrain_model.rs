@@ -81,9 +81,20 @@ pub struct TerrainModel {
 }
 
 impl TerrainModel {
-    /// An empty model over `geometry` for a rover.
+    /// An empty model over `geometry` for a rover, assessing hazards on the cells' top heights
+    /// (the grid navigators' setting).
     pub fn new(rover: &RoverConfig, geometry: GridGeometry, safety_buffer: f64) -> Self {
-        let config = Self::perception_config(rover, safety_buffer);
+        Self::with_hazard_height(rover, geometry, safety_buffer, HazardHeight::Top)
+    }
+
+    /// An empty model that runs the hazard model on the given cell height.
+    pub fn with_hazard_height(
+        rover: &RoverConfig,
+        geometry: GridGeometry,
+        safety_buffer: f64,
+        hazard_height: HazardHeight,
+    ) -> Self {
+        let config = Self::perception_config_for(rover, safety_buffer, hazard_height);
         let (cx, cy) =
             (geometry.origin_x + geometry.width_m() / 2.0, geometry.origin_y + geometry.height_m() / 2.0);
         let evaluator = TerrainEvaluator::new(config.clone(), rovernav_core::Pose2::new(cx, cy, 0.0))
@@ -121,10 +132,21 @@ impl TerrainModel {
     /// Hazard limits sit below the rover's true limits: range noise and the wheels settling into
     /// relief can turn a rock that measures exactly the clearance into belly contact.
     pub fn perception_config(rover: &RoverConfig, safety_buffer: f64) -> TerrainConfig {
+        Self::perception_config_for(rover, safety_buffer, HazardHeight::Top)
+    }
+
+    /// [`Self::perception_config`] on a chosen cell height; the margin below the clearance
+    /// follows the height's bias ([`HAZARD_MARGIN`] for means, [`TOP_HAZARD_MARGIN`] otherwise).
+    pub fn perception_config_for(
+        rover: &RoverConfig,
+        safety_buffer: f64,
+        hazard_height: HazardHeight,
+    ) -> TerrainConfig {
+        let margin = if hazard_height == HazardHeight::Mean { HAZARD_MARGIN } else { TOP_HAZARD_MARGIN };
         TerrainConfig {
             safety_buffer,
-            hazard_height: HazardHeight::Top,
-            clearance: rover.clearance * TOP_HAZARD_MARGIN,
+            hazard_height,
+            clearance: rover.clearance * margin,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
             resolution: T_GRID_RESOLUTION,
             ..TerrainConfig::for_rover(rover)
