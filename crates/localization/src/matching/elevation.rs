@@ -66,24 +66,14 @@ pub fn high_pass(map: &Grid2<f32>, window: f64) -> Grid2<f32> {
             }
         }
     }
-    let mut out = map.clone();
-    for r in 0..rows {
-        for c in 0..cols {
-            let h = *map.get(c, r);
-            if !h.is_finite() {
-                continue;
-            }
-            let (c0, c1) = (c.saturating_sub(half), (c + half + 1).min(cols));
-            let (r0, r1) = (r.saturating_sub(half), (r + half + 1).min(rows));
-            let mut s = [0.0; M];
-            for (k, sk) in s.iter_mut().enumerate() {
-                *sk = table[r1 * stride + c1][k] - table[r0 * stride + c1][k] - table[r1 * stride + c0][k]
-                    + table[r0 * stride + c0][k];
-            }
-            *out.get_mut(c, r) = (f64::from(h) - plane_at(&s, c as f64, r as f64)) as f32;
+    map_known_windows(map, half, |h, c, r, (c0, c1, r0, r1)| {
+        let mut s = [0.0; M];
+        for (k, sk) in s.iter_mut().enumerate() {
+            *sk = table[r1 * stride + c1][k] - table[r0 * stride + c1][k] - table[r1 * stride + c0][k]
+                + table[r0 * stride + c0][k];
         }
-    }
-    out
+        h - plane_at(&s, c as f64, r as f64)
+    })
 }
 
 /// The height at (u, v) of the least-squares plane z = a + b (u - u0) + d (v - v0) through
@@ -170,23 +160,12 @@ pub fn high_pass_mean(map: &Grid2<f32>, window: f64) -> Grid2<f32> {
             count[i] = n + count[i - 1] + count[i - stride] - count[i - stride - 1];
         }
     }
-    let mut out = map.clone();
-    for r in 0..rows {
-        for c in 0..cols {
-            let h = *map.get(c, r);
-            if !h.is_finite() {
-                continue;
-            }
-            let (c0, c1) = (c.saturating_sub(half), (c + half + 1).min(cols));
-            let (r0, r1) = (r.saturating_sub(half), (r + half + 1).min(rows));
-            let s =
-                sum[r1 * stride + c1] - sum[r0 * stride + c1] - sum[r1 * stride + c0] + sum[r0 * stride + c0];
-            let n = count[r1 * stride + c1] - count[r0 * stride + c1] - count[r1 * stride + c0]
-                + count[r0 * stride + c0];
-            *out.get_mut(c, r) = (f64::from(h) - s / n.max(1) as f64) as f32;
-        }
-    }
-    out
+    map_known_windows(map, half, |h, _, _, (c0, c1, r0, r1)| {
+        let s = sum[r1 * stride + c1] - sum[r0 * stride + c1] - sum[r1 * stride + c0] + sum[r0 * stride + c0];
+        let n = count[r1 * stride + c1] - count[r0 * stride + c1] - count[r1 * stride + c0]
+            + count[r0 * stride + c0];
+        h - s / n.max(1) as f64
+    })
 }
 
 /// The known cells of a map as (x, y, height) at the cell centres, in the map's frame.
@@ -199,6 +178,34 @@ pub fn occupied_cells(map: &Grid2<f32>) -> Vec<[f64; 3]> {
                 let (x, y) = map.geometry.center(c, r);
                 out.push([x, y, f64::from(h)]);
             }
+        }
+    }
+    out
+}
+
+/// Maps every known cell to `f(height, col, row, window)`, the window being the cell's
+/// `(2 half + 1)^2` neighbourhood clipped to the map as half-open `(c0, c1, r0, r1)`; unknown
+/// cells stay unknown.
+fn map_known_windows(
+    map: &Grid2<f32>,
+    half: usize,
+    f: impl Fn(f64, usize, usize, (usize, usize, usize, usize)) -> f64,
+) -> Grid2<f32> {
+    let (cols, rows) = (map.geometry.cols, map.geometry.rows);
+    let mut out = map.clone();
+    for r in 0..rows {
+        for c in 0..cols {
+            let h = *map.get(c, r);
+            if !h.is_finite() {
+                continue;
+            }
+            let window = (
+                c.saturating_sub(half),
+                (c + half + 1).min(cols),
+                r.saturating_sub(half),
+                (r + half + 1).min(rows),
+            );
+            *out.get_mut(c, r) = f(f64::from(h), c, r, window) as f32;
         }
     }
     out
