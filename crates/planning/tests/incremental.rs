@@ -43,6 +43,10 @@ impl Zero for Cost {
 /// Optimal cell-centre cost: steps cost the mean of the two cells' costs times the length,
 /// diagonals need both side cells free.
 fn dijkstra_cell_centres(grid: &CostGrid, start: Cell, goal: Cell) -> Option<f64> {
+    // Already there: the empty path, whatever the cell costs (as every planner answers).
+    if start == goal {
+        return Some(0.0);
+    }
     if grid.is_blocked(start) || grid.is_blocked(goal) {
         return None;
     }
