@@ -361,11 +361,6 @@ impl TerrainModel {
         true
     }
 
-    /// Whether the hazard state of the cell containing a point has been assessed from range data.
-    pub fn is_assessed(&self, p: Point2) -> bool {
-        self.hazard.geometry.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.assessed.get(c, r))
-    }
-
     /// Whether a point lies in a grown hazard.
     pub fn is_grown_hazard(&self, p: Point2) -> bool {
         self.hazard.geometry.cell_of(p.x, p.y).is_some_and(|(c, r)| *self.grown.get(c, r))
