@@ -23,7 +23,6 @@
 //! rover`); [`LocalLink`] fills it in process, through JSON, for tests.
 
 use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
-use crate::deliberative::{Deliberative, DeliberativeConfig};
 use crate::messages::{ControlAction, FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
 use crate::operator::OperatorLink;
 use crate::platform::{ScheduledFault, SimPlatform};
@@ -526,21 +525,8 @@ pub fn run_remote_logged(
     let mut runtime = Runtime::new(Bus::in_process())?;
     let platform = Box::new(RemotePlatform::new(link, &mission.name, mission.seed));
     crate::run::add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, platform)?;
-    let mut external = Deliberative::ports();
-    external.push(Port::of(topics::OPERATOR_COMMAND));
-    runtime.validate(&external)?;
-    let config = DeliberativeConfig {
-        time_limit_s: mission.time_limit_s,
-        max_cycles: mission.max_cycles,
-        keep_out: world.goal.keep_out.clone(),
-        tolerance: world.goal.tolerance,
-        mast_range_m: world.rover.mast_range,
-        fault_protection: options.fault_protection.clone(),
-    };
-    let mut deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
-    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
-    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
-    runtime.initialize(0.0)?;
+    let (mut deliberative, replies, tap) =
+        crate::run::wire_deliberative(&mut runtime, &world, mission, options, observer)?;
 
     let mut trace = Trace::default();
     trace.estimate.push(estimator(&runtime).estimate().pose);

@@ -21,7 +21,7 @@ use crate::sensor_servers::{
     ContactMonitor, InertialSensors, MAX_BODY_CONTACTS, RangeSensors, WheelOdometry,
 };
 use crate::world::{World, WorldError, build_world};
-use rovernav_bus::{Bus, BusError, InProcessTransport, Record, Subscriber};
+use rovernav_bus::{Bus, BusError, InProcessTransport, Record, Subscriber, TapId};
 use rovernav_core::{
     Grid2, GridGeometry, NavCommand, Navigator, Overlay, Point2, Pose3, PoseEstimate, SensorFrame,
 };
@@ -261,6 +261,35 @@ pub fn run_mission_with(
     run_world_with(world, &RunSettings::of(mission), &options, origin, on_progress, observer, operator)
 }
 
+/// Wires the deliberative layer onto a runtime whose components are added (local or remote
+/// platform alike): checks every port is served, builds the deliberative layer from the world and
+/// settings, subscribes to operator replies, taps the bus if the observer wants it, and
+/// initialises the runtime.
+pub(crate) fn wire_deliberative(
+    runtime: &mut Runtime,
+    world: &World,
+    mission: &RunSettings,
+    options: &RunOptions,
+    observer: &dyn RunObserver,
+) -> Result<(Deliberative, Subscriber<String>, Option<TapId>), RunError> {
+    let mut external = Deliberative::ports();
+    external.push(Port::of(topics::OPERATOR_COMMAND));
+    runtime.validate(&external)?;
+    let config = DeliberativeConfig {
+        time_limit_s: mission.time_limit_s,
+        max_cycles: mission.max_cycles,
+        keep_out: world.goal.keep_out.clone(),
+        tolerance: world.goal.tolerance,
+        mast_range_m: world.rover.mast_range,
+        fault_protection: options.fault_protection.clone(),
+    };
+    let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
+    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
+    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
+    runtime.initialize(0.0)?;
+    Ok((deliberative, replies, tap))
+}
+
 /// [`run_world`] with an observer watching every cycle.
 pub fn run_world_observed(
     world: World,
@@ -301,21 +330,8 @@ pub fn run_world_with(
     let mut runtime = Runtime::new(bus)?;
     let sim_platform = Box::new(SimPlatform::new(sim, options.faults.clone()));
     add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, sim_platform)?;
-    let mut external = Deliberative::ports();
-    external.push(Port::of(topics::OPERATOR_COMMAND));
-    runtime.validate(&external)?;
-    let config = DeliberativeConfig {
-        time_limit_s: mission.time_limit_s,
-        max_cycles: mission.max_cycles,
-        keep_out: world.goal.keep_out.clone(),
-        tolerance: world.goal.tolerance,
-        mast_range_m: world.rover.mast_range,
-        fault_protection: options.fault_protection.clone(),
-    };
-    let mut deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
-    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
-    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
-    runtime.initialize(0.0)?;
+    let (mut deliberative, replies, tap) =
+        wire_deliberative(&mut runtime, &world, mission, options, observer)?;
 
     let mut trace = Trace::default();
     let dem_geometry = *world.terrain.dem.geometry();
