@@ -98,17 +98,7 @@ pub fn assess_cells<'a>(
     let hazard_heights: Vec<f32> = match config.hazard_height {
         HazardHeight::Mean => heights.clone(),
         HazardHeight::Max => stats.iter().map(|c| if c.count > 0 { c.max_z } else { f32::NAN }).collect(),
-        HazardHeight::Top => stats
-            .iter()
-            .zip(&heights)
-            .map(|(c, &mean)| match c.variance() {
-                Some(var) if c.count > 1 => {
-                    let top = mean as f64 + (var - noise_var).max(0.0).sqrt();
-                    top.min(c.max_z as f64) as f32
-                }
-                _ => mean,
-            })
-            .collect(),
+        HazardHeight::Top => stats.iter().map(|c| top_height(c, noise_var)).collect(),
     };
     let footprint = analyse_footprints(&hazard_heights, cols, rows, res, &config.footprint_params());
     let traversability =
@@ -128,6 +118,19 @@ pub fn assess_cells<'a>(
         step: grid(footprint.step),
         slope: grid(footprint.slope),
         roughness: grid(footprint.roughness),
+    }
+}
+
+/// [`HazardHeight::Top`] of one cell: the mean plus the spread of its points beyond the sensor
+/// noise (variance `noise_var`), capped at the highest point; NaN when unsensed.
+fn top_height(cell: &CellStats, noise_var: f64) -> f32 {
+    // The mean as the elevation layer stores it (f32), so Top starts from that layer's value.
+    let Some(mean) = cell.mean().map(|m| m as f32) else { return f32::NAN };
+    match cell.variance() {
+        Some(var) if cell.count > 1 => {
+            (mean as f64 + (var - noise_var).max(0.0).sqrt()).min(cell.max_z as f64) as f32
+        }
+        _ => mean,
     }
 }
 
@@ -333,6 +336,23 @@ mod tests {
         assert!(hazard_at_rock(HazardHeight::Max, 0.17, 0.0));
         // A 0.13 m rock is below the clearance whatever the estimate.
         assert!(!hazard_at_rock(HazardHeight::Top, 0.13, 0.0));
+    }
+
+    #[test]
+    fn top_height_is_the_rock_on_a_straddling_cell_and_the_mean_on_noisy_ground() {
+        let cell = |zs: &[f64]| {
+            let mut c = CellStats::EMPTY;
+            zs.iter().for_each(|&z| c.add(0.0, 0.0, z));
+            c
+        };
+        // Half the points on a 0.17 m rock top: mean 0.085, spread 0.085.
+        let straddling = cell(&[0.0, 0.0, 0.0, 0.0, 0.17, 0.17, 0.17, 0.17]);
+        assert!((top_height(&straddling, 0.0) - 0.17).abs() < 1e-6);
+        // Flat ground sampled with +-1 cm noise, the configured noise: the spread is all noise.
+        let noisy = cell(&[0.01, -0.01, 0.01, -0.01]);
+        assert!(top_height(&noisy, 1e-4).abs() < 1e-6);
+        assert!((top_height(&noisy, 0.0) - 0.01).abs() < 1e-6, "without the discount it reads 1 cm high");
+        assert!(top_height(&CellStats::EMPTY, 1e-4).is_nan());
     }
 
     #[test]
