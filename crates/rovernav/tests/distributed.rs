@@ -15,28 +15,14 @@ fn text(bytes: &[u8]) -> String {
 }
 
 #[cfg(feature = "zenoh")]
+mod common;
+
+#[cfg(feature = "zenoh")]
 mod over_zenoh {
     use super::*;
     use std::path::{Path, PathBuf};
     use std::process::{Child, Output};
     use std::time::{Duration, Instant};
-
-    const MISSION: &str = r#"
-name = "distributed-yard"
-seed = 3
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-[goal]
-x = 9.5
-y = 8.5
-"#;
 
     /// Longest a process of these tests may run before it is killed (a healthy one takes seconds).
     const DEADLINE: Duration = Duration::from_secs(45);
@@ -55,7 +41,7 @@ y = 8.5
 
         fn mission(&self) -> PathBuf {
             let path = self.0.join("mission.toml");
-            std::fs::write(&path, MISSION).unwrap();
+            std::fs::write(&path, crate::common::SMALL_YARD).unwrap();
             path
         }
     }

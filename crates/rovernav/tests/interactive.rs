@@ -1,32 +1,17 @@
 //! `rovernav run --interactive` with commands piped in: a new goal, a status query and a bad
 //! command while a small mission runs.
 
+mod common;
+
 use std::io::Write;
 use std::process::{Command, Stdio};
-
-const MISSION: &str = r#"
-name = "interactive-yard"
-seed = 3
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-[goal]
-x = 9.5
-y = 8.5
-"#;
 
 #[test]
 fn piped_commands_change_the_goal_answer_status_and_name_the_bad_token() {
     let dir = std::env::temp_dir().join(format!("rovernav-interactive-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mission = dir.join("mission.toml");
-    std::fs::write(&mission, MISSION).unwrap();
+    std::fs::write(&mission, common::SMALL_YARD).unwrap();
     let out = dir.join("out");
     let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
         .args(["run", mission.to_str().unwrap(), "--interactive", "--out", out.to_str().unwrap()])
