@@ -16,7 +16,7 @@
 //! stops only where it can turn. A turn that becomes unsafe after new sensing is refused at
 //! execution and the rover retraces its latest motions to room to turn.
 
-use crate::terrain_model::{CostMode, TerrainModel};
+use crate::terrain_model::{CostMode, TerrainModel, cells_in_disc};
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
     Pose2, RoverConfig, SenseRequest, angle_diff,
@@ -207,17 +207,8 @@ impl GridNavigator {
         let mut grid = terrain.cost_grid(self.cost_mode(), from, goal);
         let g = grid.geometry();
         for &p in closed {
-            let reach = (TURN_CLOSE_RADIUS_M / g.resolution).ceil() as isize;
-            if let Some((c, r)) = g.cell_of(p.x, p.y) {
-                for dr in -reach..=reach {
-                    for dc in -reach..=reach {
-                        let (rr, cc) = (r as isize + dr, c as isize + dc);
-                        let q = Point2::new(p.x + dc as f64 * g.resolution, p.y + dr as f64 * g.resolution);
-                        if rr >= 0 && cc >= 0 && q.dist(p) <= TURN_CLOSE_RADIUS_M {
-                            let _ = grid.set_cost(Cell::new(rr as usize, cc as usize), f32::INFINITY);
-                        }
-                    }
-                }
+            for (c, r) in cells_in_disc(&g, p, TURN_CLOSE_RADIUS_M) {
+                let _ = grid.set_cost(Cell::new(r, c), f32::INFINITY);
             }
         }
         let to_cell = |p: Point2| -> Option<Cell> { g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c)) };

@@ -298,19 +298,9 @@ impl TerrainModel {
     /// Records an obstacle the body met but perception missed (a hazard contact), so the
     /// planner never drives into it again.
     pub fn mark_contact(&mut self, p: Point2) {
-        let g = self.hazard.geometry;
-        let reach = 0.25;
-        let steps = (reach / g.resolution).ceil() as isize;
-        for dr in -steps..=steps {
-            for dc in -steps..=steps {
-                let q = Point2::new(p.x + dc as f64 * g.resolution, p.y + dr as f64 * g.resolution);
-                if q.dist(p) <= reach
-                    && let Some((c, r)) = g.cell_of(q.x, q.y)
-                {
-                    *self.hazard.get_mut(c, r) = true;
-                    *self.assessed.get_mut(c, r) = true;
-                }
-            }
+        for (c, r) in cells_in_disc(&self.hazard.geometry, p, 0.25) {
+            *self.hazard.get_mut(c, r) = true;
+            *self.assessed.get_mut(c, r) = true;
         }
         self.grow_hazards();
     }
@@ -426,6 +416,24 @@ impl TerrainModel {
             .map(|o| o.vertices)
             .collect()
     }
+}
+
+/// The cells under the points `p + (dc, dr) * resolution` that lie within `radius` of `p`: a
+/// disc of cells around `p`, clipped to the grid.
+pub fn cells_in_disc(g: &GridGeometry, p: Point2, radius: f64) -> Vec<(usize, usize)> {
+    let steps = (radius / g.resolution).ceil() as isize;
+    let mut out = Vec::new();
+    for dr in -steps..=steps {
+        for dc in -steps..=steps {
+            let q = Point2::new(p.x + dc as f64 * g.resolution, p.y + dr as f64 * g.resolution);
+            if q.dist(p) <= radius
+                && let Some(cell) = g.cell_of(q.x, q.y)
+            {
+                out.push(cell);
+            }
+        }
+    }
+    out
 }
 
 /// Growth that keeps a rover driving straight (half its width plus the heading allowance and the
