@@ -14,8 +14,8 @@ pub mod sensors;
 pub use geometry::{Point2, Pose2, Pose3, angle_diff, wrap_angle};
 pub use grid::{Grid2, GridGeometry};
 pub use nav::{
-    DriveGuard, Goal, Localizer, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay,
-    OverlayKind, PoseEstimate, SenseRequest,
+    DriveGuard, Goal, Localizer, LocalizerStats, NavCommand, NavInput, Navigator, NavigatorStats, Outcome,
+    Overlay, OverlayKind, PoseEstimate, SenseRequest,
 };
 pub use rover::RoverConfig;
 pub use sensors::{CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, SensorFrame, Wedge};

@@ -176,6 +176,26 @@ pub trait Navigator: Send {
     fn stats(&self) -> NavigatorStats;
 }
 
+/// Counters a localiser keeps about its corrections, for the report (all zero for a localiser
+/// that makes none, e.g. dead reckoning).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LocalizerStats {
+    /// Terrain matches tried.
+    pub matches_attempted: u64,
+    /// Fixes fused into the estimate.
+    pub fixes_used: u64,
+    /// Fixes rejected or matches that failed (reported, not used).
+    pub fixes_rejected: u64,
+    /// Of the rejected fixes, those judged uncertain (failure probability or wide covariance).
+    pub rejected_uncertain: u64,
+    /// Of the rejected fixes, those whose best pose lay on the search window's edge.
+    pub rejected_on_edge: u64,
+    /// Gyro samples used by zero-velocity (bias) updates.
+    pub zero_velocity_updates: u64,
+    /// Odometry steps in which wheel slip was detected and corrected.
+    pub slip_corrections: u64,
+}
+
 /// A pose estimator fed by proprioceptive sensors and optional absolute fixes.
 pub trait Localizer: Send {
     /// Registry name.
@@ -186,4 +206,8 @@ pub trait Localizer: Send {
     fn update(&mut self, frame: &SensorFrame);
     /// The current estimate.
     fn estimate(&self) -> PoseEstimate;
+    /// Counters for the report.
+    fn stats(&self) -> LocalizerStats {
+        LocalizerStats::default()
+    }
 }

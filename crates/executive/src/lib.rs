@@ -28,7 +28,9 @@ pub use command_language::{CommandError, OperatorCommand, help_text, parse_comma
 pub use components::{Component, ComponentFault, JausState};
 pub use mission::{Mission, MissionError};
 pub use operator::{OperatorLink, ScriptedOperator};
-pub use report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
+pub use report::{
+    ComponentReport, FaultReport, HazardEvent, LocalizationStats, Report, StageTimes, TaskReport,
+};
 pub use run::{
     BusKind, CycleRecord, NoObserver, Progress, RunError, RunObserver, RunOptions, RunOutput, RunSettings,
     Trace, run_mission, run_mission_observed, run_mission_with, run_world, run_world_observed,

@@ -288,6 +288,11 @@ impl PoseEstimatorComponent {
         self.localizer.estimate()
     }
 
+    /// The localiser's correction counters.
+    pub fn localizer_stats(&self) -> rovernav_core::LocalizerStats {
+        self.localizer.stats()
+    }
+
     /// Integrates new frames and resets, publishing an estimate after each frame. The estimator
     /// keeps tracking in Standby and Emergency: the rover can still be moved, and the gyro and
     /// encoder streams must not have gaps.

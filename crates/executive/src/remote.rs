@@ -26,9 +26,9 @@ use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
 use crate::messages::{ControlAction, FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
 use crate::operator::OperatorLink;
 use crate::platform::{ScheduledFault, SimPlatform};
-use crate::reflexive::{NavigatorComponent, PoseEstimatorComponent};
 use crate::report::{HazardEvent, Report, StageTimes};
 use crate::run::{NoObserver, Progress, RunError, RunObserver, RunOptions, RunOutput, RunSettings, Trace};
+use crate::run::{estimator, navigator_of};
 use crate::runtime::Runtime;
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
@@ -625,6 +625,7 @@ pub fn run_remote_logged(
         straight_line_m: scoring.straight_line_m,
         hazard_events: scoring.hazard_events,
         compute_per_cycle: crate::run::per_cycle(spent, cycles),
+        localization_stats: Some(estimator(&runtime).localizer_stats().into()),
         ..crate::run::executive_outcome(&runtime, &deliberative)
     };
     observer.on_finish(&report, &trace);
@@ -637,10 +638,4 @@ fn remote(rt: &Runtime) -> &RemotePlatform {
 }
 fn remote_mut(rt: &mut Runtime) -> &mut RemotePlatform {
     rt.get_mut::<RemotePlatform>().expect("a remote run has a remote platform")
-}
-fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
-    rt.get::<PoseEstimatorComponent>().expect("every run has a pose estimator")
-}
-fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
-    rt.get::<NavigatorComponent>().expect("every run has a navigator")
 }

@@ -51,6 +51,43 @@ pub struct Report {
     /// The mission plan's tasks and how each ended.
     #[serde(default)]
     pub tasks: Vec<TaskReport>,
+    /// The localiser's correction counters (null when unknown, e.g. recomputed from a cut-off log).
+    #[serde(default)]
+    pub localization_stats: Option<LocalizationStats>,
+}
+
+/// The localiser's counters: terrain-matching fixes used and rejected, zero-velocity updates, slip
+/// corrections (issue 5: a failed or uncertain match is reported, not used).
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct LocalizationStats {
+    /// Terrain matches tried.
+    pub matches_attempted: u64,
+    /// Fixes fused into the estimate.
+    pub fixes_used: u64,
+    /// Fixes rejected or matches that failed.
+    pub fixes_rejected: u64,
+    /// Of the rejected, those judged uncertain (failure probability or wide covariance).
+    pub rejected_uncertain: u64,
+    /// Of the rejected, those whose best pose lay on the search window's edge.
+    pub rejected_on_edge: u64,
+    /// Gyro samples used by zero-velocity (bias) updates.
+    pub zero_velocity_updates: u64,
+    /// Odometry steps with wheel slip detected and corrected.
+    pub slip_corrections: u64,
+}
+
+impl From<rovernav_core::LocalizerStats> for LocalizationStats {
+    fn from(s: rovernav_core::LocalizerStats) -> Self {
+        Self {
+            matches_attempted: s.matches_attempted,
+            fixes_used: s.fixes_used,
+            fixes_rejected: s.fixes_rejected,
+            rejected_uncertain: s.rejected_uncertain,
+            rejected_on_edge: s.rejected_on_edge,
+            zero_velocity_updates: s.zero_velocity_updates,
+            slip_corrections: s.slip_corrections,
+        }
+    }
 }
 
 /// A component's final state.

@@ -455,6 +455,7 @@ pub fn run_world_with(
         straight_line_m: world.start.position().dist(goal.position),
         hazard_events,
         compute_per_cycle: per_cycle(spent, cycles),
+        localization_stats: Some(estimator(&runtime).localizer_stats().into()),
         ..executive_outcome(&runtime, &deliberative)
     };
     observer.on_finish(&report, &trace);
@@ -577,10 +578,10 @@ fn platform(rt: &Runtime) -> &SimPlatform {
 fn platform_mut(rt: &mut Runtime) -> &mut SimPlatform {
     rt.get_mut::<SimPlatform>().expect("every run has a platform")
 }
-fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
+pub(crate) fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
     rt.get::<PoseEstimatorComponent>().expect("every run has a pose estimator")
 }
-fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
+pub(crate) fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
     rt.get::<NavigatorComponent>().expect("every run has a navigator")
 }
 

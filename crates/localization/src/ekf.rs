@@ -19,8 +19,8 @@
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector3, Vector4};
 use rovernav_core::{
-    ImuSample, Localizer, OdometrySample, Pose3, PoseEstimate, RoverConfig, SensorFrame, angle_diff,
-    wrap_angle,
+    ImuSample, Localizer, LocalizerStats, OdometrySample, Pose3, PoseEstimate, RoverConfig, SensorFrame,
+    angle_diff, wrap_angle,
 };
 
 use crate::matching::MatchResult;
@@ -445,6 +445,18 @@ impl Ekf {
 impl Localizer for Ekf {
     fn name(&self) -> &str {
         "ekf"
+    }
+
+    fn stats(&self) -> LocalizerStats {
+        let s = Ekf::stats(self);
+        LocalizerStats {
+            matches_attempted: s.fixes_fused + s.fixes_rejected,
+            fixes_used: s.fixes_fused,
+            fixes_rejected: s.fixes_rejected,
+            zero_velocity_updates: s.zero_updates,
+            slip_corrections: s.slip_corrections,
+            ..LocalizerStats::default()
+        }
     }
 
     fn reset(&mut self, pose: Pose3) {

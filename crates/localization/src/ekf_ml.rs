@@ -23,7 +23,8 @@
 use std::collections::HashMap;
 
 use rovernav_core::{
-    Grid2, GridGeometry, Localizer, Point2, PointCloud, Pose3, PoseEstimate, RoverConfig, SensorFrame,
+    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose3, PoseEstimate, RoverConfig,
+    SensorFrame,
 };
 
 use crate::ekf::{Ekf, EkfParams};
@@ -426,6 +427,19 @@ impl Localizer for EkfMl {
 
     fn estimate(&self) -> PoseEstimate {
         self.ekf.estimate()
+    }
+
+    fn stats(&self) -> LocalizerStats {
+        let (m, e) = (self.stats, self.ekf.stats());
+        LocalizerStats {
+            matches_attempted: m.matches_attempted,
+            fixes_used: m.fixes_used,
+            fixes_rejected: m.fixes_rejected,
+            rejected_uncertain: m.rejected_uncertain,
+            rejected_on_edge: m.rejected_on_edge,
+            zero_velocity_updates: e.zero_updates,
+            slip_corrections: e.slip_corrections,
+        }
     }
 }
 

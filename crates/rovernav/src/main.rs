@@ -64,6 +64,9 @@ struct RunArgs {
     /// Override the mission's navigator (registry name).
     #[arg(long)]
     navigator: Option<String>,
+    /// Override the mission's localiser (registry name: dead-reckoning, ekf, ekf-ml).
+    #[arg(long)]
+    localizer: Option<String>,
     /// Print report.json to standard output.
     #[arg(long)]
     json: bool,
@@ -97,6 +100,15 @@ impl MissionToRun {
         if let Some(nav) = &args.navigator {
             mission.navigator = nav.clone();
             origin_of_navigator = "--navigator".into();
+        }
+        if let Some(name) = &args.localizer {
+            if !rovernav_localization::LOCALIZER_NAMES.contains(&name.as_str()) {
+                anyhow::bail!(
+                    "--localizer: unknown localizer `{name}` (known: {})",
+                    rovernav_localization::LOCALIZER_NAMES.join(", ")
+                );
+            }
+            mission.localizer = name.clone();
         }
         let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
         Ok(Self { mission, origin_of_navigator, out_dir })

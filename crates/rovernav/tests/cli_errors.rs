@@ -54,6 +54,8 @@ fn unknown_navigator_names_the_field() {
     assert_one_line_error(ok, &err, &["nav.toml", "navigator", "warp-drive"]);
     let (ok, err) = rovernav(&["run", "--navigator", "warp-drive"]);
     assert_one_line_error(ok, &err, &["--navigator", "warp-drive"]);
+    let (ok, err) = rovernav(&["run", "--localizer", "star-tracker"]);
+    assert_one_line_error(ok, &err, &["--localizer", "star-tracker", "ekf-ml"]);
 }
 
 #[test]

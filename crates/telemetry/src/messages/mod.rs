@@ -972,6 +972,21 @@ pub fn report_schema() -> Value {
                     ],
                 ),
             ),
+            (
+                "localization_stats",
+                nullable(object(
+                    "the localiser's correction counters",
+                    &[
+                        ("matches_attempted", integer("terrain matches tried")),
+                        ("fixes_used", integer("fixes fused into the estimate")),
+                        ("fixes_rejected", integer("fixes rejected or matches failed")),
+                        ("rejected_uncertain", integer("rejected as uncertain")),
+                        ("rejected_on_edge", integer("rejected on the search window's edge")),
+                        ("zero_velocity_updates", integer("gyro samples used by zero-velocity updates")),
+                        ("slip_corrections", integer("odometry steps with slip corrected")),
+                    ],
+                )),
+            ),
         ],
     );
     schema["additionalProperties"] = Value::Bool(true);
@@ -1114,5 +1129,16 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(through_json(&report, &report_schema()), report);
+        let with_stats = rovernav_executive::Report {
+            localization_stats: Some(rovernav_executive::LocalizationStats {
+                matches_attempted: 7,
+                fixes_used: 5,
+                fixes_rejected: 2,
+                rejected_on_edge: 1,
+                ..Default::default()
+            }),
+            ..report
+        };
+        assert_eq!(through_json(&with_stats, &report_schema()), with_stats);
     }
 }
