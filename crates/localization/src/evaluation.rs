@@ -244,9 +244,12 @@ pub struct BnbReport {
     pub exact: u64,
     /// Poses of the lattices (what exhaustive search scores).
     pub lattice_poses: u64,
-    /// Evaluations branch and bound made: every cell bound and every single pose scored
-    /// counts one (a cell bound costs the same as scoring one pose: one lookup per local cell).
+    /// Evaluations branch and bound made, in poses scored: its distance-transform lookups over
+    /// the local cells per pose (a pose scored counts one; a box bounded counts the fraction
+    /// of the local cells it looked up, see [`crate::matching::engine::SearchOutcome`]).
     pub evaluations: u64,
+    /// Boxes bounded and poses scored, whatever their cost.
+    pub boxes: u64,
     /// Of those, single poses scored.
     pub poses_tested: u64,
 }
@@ -267,6 +270,7 @@ impl BnbReport {
         self.exact += o.exact;
         self.lattice_poses += o.lattice_poses;
         self.evaluations += o.evaluations;
+        self.boxes += o.boxes;
         self.poses_tested += o.poses_tested;
     }
 }
@@ -354,6 +358,7 @@ pub fn bnb_efficiency(
                             exact: u64::from(bb.score == ex.score),
                             lattice_poses: lattice.size(),
                             evaluations: bb.evaluations,
+                            boxes: bb.boxes,
                             poses_tested: bb.poses_tested,
                         });
                     }

@@ -259,6 +259,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
         "bnb_pose_ratio": bnb.lattice_poses as f64 / bnb.poses_tested.max(1) as f64,
         "bnb_lattice_poses": bnb.lattice_poses,
         "bnb_evaluations": bnb.evaluations,
+        "bnb_boxes_bounded": bnb.boxes,
         "bnb_poses_tested": bnb.poses_tested,
         "mean_abs_err_downrange_m": downrange,
         "mean_abs_err_crossrange_m": crossrange,
@@ -278,11 +279,13 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&figures)?);
     } else {
         println!(
-            "branch and bound: {}/{} cases exact; {:.1}x fewer evaluations (cell bounds + poses) and {:.1}x fewer \
-             single poses than exhaustive search ({} lattice poses) [{bnb_s:.1} s]",
+            "branch and bound: {}/{} cases exact; {:.1}x fewer evaluations (distance-transform lookups in \
+             poses, {} boxes bounded) and {:.1}x fewer single poses than exhaustive search ({} lattice poses) \
+             [{bnb_s:.1} s]",
             bnb.exact,
             bnb.cases,
             bnb.evaluation_ratio(),
+            bnb.boxes,
             bnb.lattice_poses as f64 / bnb.poses_tested.max(1) as f64,
             bnb.lattice_poses
         );

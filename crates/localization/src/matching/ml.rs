@@ -144,7 +144,7 @@ impl DistanceScore for MixtureLikelihood {
 /// Min-filter levels kept for a bound kind (half-sides 1 to 16 cells).
 pub(crate) fn pool_levels(bound: BoundKind) -> usize {
     match bound {
-        BoundKind::MinPool => 5,
+        BoundKind::MinPool => 12,
         BoundKind::Distance => 0,
     }
 }
@@ -247,7 +247,10 @@ impl MlMatcher {
             temperature: self.params.temperature,
             failure_margin: self.params.failure_margin,
             min_exclusion: 3,
-            fit_radius: 2,
+            // The likelihood of sparse stereo views is skewed away from its peak: a normal
+            // fitted to +-2 steps followed the skew (measured on the simulator's mast stereo
+            // sequence: 4.2 cm mean downrange error, 3.5 cm with +-1 step).
+            fit_radius: 1,
             max_competitors: 4,
         };
         self.with_scorer(local, window, overlap_pose, |scorer| run_match(scorer, &analysis, exhaustive))

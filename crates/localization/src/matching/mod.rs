@@ -33,7 +33,9 @@ pub struct MatchResult {
     pub log_likelihood: f64,
     /// Estimated probability that the match picked the wrong place.
     pub failure_probability: f64,
-    /// Poses (cells and single poses) whose score or bound the main search evaluated.
+    /// The main search's work in pose evaluations: its distance-transform lookups divided by
+    /// the local cells scored per pose (poses scored count one each, box bounds the fraction
+    /// of the local cells they looked up).
     pub poses_evaluated: u64,
 }
 
