@@ -31,16 +31,33 @@
 //!   (a crater rim around it) it has no free way out;
 //! * when normal boundary following has turned the gaze all around without a boundary vertex
 //!   in the interior of the conglomerate wedge (the paper aborts), it steps to the most extreme
-//!   directly reachable node not yet visited, and asks for help only when there is none.
+//!   directly reachable node not yet visited; when there is none, or when virtual boundary
+//!   following finds no silhouette (in clutter the C-obstacles hide each other's), it takes the
+//!   LTG path to an unvisited node minimising path length plus distance to the goal (the
+//!   TangentBug heuristic), and halts only when there is no such node;
+//! * the loop around `V_loop` proves the goal unreachable only when the positions of the
+//!   boundary-following segment wind around the goal (more than 3/4 of a turn): in clutter the
+//!   rover can come back near `V_loop` around another obstacle;
+//! * cell means lose part of a small rock's height, so rocks just over the clearance can escape
+//!   the step/slope model behind the C-obstacles. A second, bounded memory of hazard cells on
+//!   top heights ([`HazardHeight::Top`], the grid navigators' setting) is kept in a 12 m
+//!   robot-centred grid across steps (dead-reckoning drift over a few steps is small against
+//!   the margins). Its cells that stand out from the ground around them become extra
+//!   C-obstacles grown only by half the rover's width plus an allowance (grown like the others
+//!   they would close the gaps of a rock field), and every turn in place and drive is checked
+//!   against them, body outline plus margin, before it is commanded: the first leg of every
+//!   plan when the LTG is built, later legs at execution (a refused one starts a new step);
+//!   turns go the long way round when only that is clear, and a rover that cannot turn in place
+//!   at all backs out straight before giving up.
 //!
 //! Mission keep-out polygons are C-obstacles like sensed ones (their hulls, grown alike).
 
-use crate::terrain_model::HAZARD_MARGIN;
+use crate::terrain_model::{HAZARD_MARGIN, T_GRID_RESOLUTION, TOP_HAZARD_MARGIN};
 use rovernav_core::{
-    DriveGuard, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind, Point2,
-    Pose2, RoverConfig, SenseRequest, angle_diff,
+    DriveGuard, Grid2, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
+    Point2, Pose2, RoverConfig, SenseRequest, angle_diff,
 };
-use rovernav_perception::{CObstacle, SensedWedge, TerrainConfig, TerrainEvaluator};
+use rovernav_perception::{CObstacle, HazardHeight, SensedWedge, TerrainConfig, TerrainEvaluator};
 use std::collections::VecDeque;
 use std::f64::consts::PI;
 
@@ -67,6 +84,21 @@ pub struct RoverBugConfig {
     pub max_wedges: u64,
     /// Hazard contacts recorded around one place before asking for help.
     pub max_contacts_here: usize,
+    /// Clearance kept between the body outline and a safety-layer hazard cell when a motion is
+    /// checked before it is commanded (m).
+    pub body_margin: f64,
+    /// Motions refused by the safety check at one place before asking for help.
+    pub max_refusals_here: u32,
+    /// Added to half the rover's width to grow the safety layer's own C-obstacles (m): the
+    /// body margin plus the swing of the body's corners on arcs that start up to the turn
+    /// threshold off the chord.
+    pub top_allowance: f64,
+    /// Straight drive out of a position where safety-layer hazards forbid a full turn in place
+    /// and planning gave up (m).
+    pub escape_distance: f64,
+    /// Fraction of the safety layer's step limit by which a hazard cell's own points must
+    /// stand out from the ground around it to count (see `confirm_hazards`).
+    pub confirm_fraction: f64,
 }
 
 impl Default for RoverBugConfig {
@@ -81,6 +113,11 @@ impl Default for RoverBugConfig {
             max_steps: 200,
             max_wedges: 300,
             max_contacts_here: 6,
+            body_margin: 0.08,
+            max_refusals_here: 4,
+            top_allowance: 0.15,
+            escape_distance: 0.4,
+            confirm_fraction: 0.3,
         }
     }
 }
@@ -131,6 +168,20 @@ pub struct RoverBug {
     carried: Vec<CObstacle>,
     /// C-obstacles around recorded hazard contacts.
     contacts: Vec<CObstacle>,
+    /// The pose estimate the current plan starts from (its first leg is checked for safety).
+    here: Option<Pose2>,
+    /// How many of `obstacles` come from sensing (this view's and the carried ones).
+    sensed_len: usize,
+    /// Top-height hazard cells in a robot-centred grid kept across steps: the swept body of
+    /// every turn and drive is checked against it before the motion is commanded.
+    safety: Option<TerrainEvaluator>,
+    /// The safety layer's hazard cells that stand out from the ground around them (see
+    /// [`RoverBug::confirm_hazards`]).
+    safety_hazard: Option<Grid2<bool>>,
+    /// Motions refused by the safety check since the last one commanded, and where.
+    refusals: (u32, Point2),
+    /// Escapes from a boxed-in position, and where the last one started.
+    escapes: (u32, Point2),
     /// Sign of the last motion: 1 forward, -1 reverse, 2 turn in place.
     last_motion: Option<f64>,
     /// Where the last forward drive started (estimate).
@@ -171,6 +222,12 @@ impl RoverBug {
             carried: Vec::new(),
             visited: Vec::new(),
             contacts: Vec::new(),
+            here: None,
+            sensed_len: 0,
+            safety: None,
+            safety_hazard: None,
+            refusals: (0, Point2::new(f64::NAN, f64::NAN)),
+            escapes: (0, Point2::new(f64::NAN, f64::NAN)),
             last_motion: None,
             drive_from: None,
             waypoints: VecDeque::new(),
@@ -322,7 +379,10 @@ impl RoverBug {
                     continue;
                 }
                 let (a, b) = if j == 0 { (b, a) } else { (a, b) };
-                if self.segment_free(a, b, x) && self.segment_visible(a, b) {
+                if self.segment_free(a, b, x)
+                    && self.segment_visible(a, b)
+                    && (i != 0 || self.leg_clear(nodes[j].p))
+                {
                     let d = a.dist(b);
                     adj[i].push((j, d));
                     adj[j].push((i, d));
@@ -497,8 +557,21 @@ impl RoverBug {
         let x = pose.position();
         let reach = self.config.near_visible + 0.5;
         self.carried = std::mem::take(&mut self.obstacles);
-        self.carried.truncate(self.carried.len().saturating_sub(self.contacts.len()));
+        self.carried.truncate(self.sensed_len);
         self.carried.retain(|o| o.signed_clearance(x) < reach);
+        if self.safety.is_none() {
+            // Top heights do not lose a small rock's height as cell means do (the C-obstacles'
+            // hazard model), on the grid navigators' finer cells and margin.
+            let config = TerrainConfig {
+                cols: 121,
+                rows: 121,
+                resolution: T_GRID_RESOLUTION,
+                hazard_height: HazardHeight::Top,
+                clearance: self.rover.clearance * TOP_HAZARD_MARGIN,
+                ..self.terrain.clone()
+            };
+            self.safety = TerrainEvaluator::new(config, pose).ok();
+        }
         self.view = match TerrainEvaluator::new(self.terrain.clone(), pose) {
             Ok(evaluator) => Some(View { evaluator, wedges: Vec::new(), origin: pose.position() }),
             Err(e) => {
@@ -522,14 +595,21 @@ impl RoverBug {
             self.drawn_wedges.push(wedge_polygon(pose, &cloud.wedge));
         }
         view.evaluator.update(&input.frame.clouds, &input.estimate);
+        if let Some(safety) = self.safety.as_mut() {
+            safety.update(&input.frame.clouds, &input.estimate);
+        }
         self.obstacles = view.evaluator.layers().c_obstacles(&self.terrain, &view.wedges, Some(goal));
         self.obstacles.retain(|o| o.vertices.len() >= 3);
+        let fresh = self.obstacles.len();
         self.obstacles.extend(self.carried.iter().cloned());
-        self.obstacles.extend(self.contacts.iter().cloned());
-        let fresh = self.obstacles.len() - self.carried.len() - self.contacts.len();
-        for o in &self.obstacles[..fresh] {
+        self.sensed_len = self.obstacles.len();
+        self.safety_hazard = self.confirm_hazards();
+        let top = self.top_obstacles(pose);
+        self.obstacles.extend(top);
+        for o in self.obstacles[..fresh].iter().chain(&self.obstacles[self.sensed_len..]) {
             self.drawn_obstacles.push(o.vertices.clone());
         }
+        self.obstacles.extend(self.contacts.iter().cloned());
         // Keep-out zones are C-obstacles like any sensed one (their convex hulls, grown by the
         // same margin: conservative for a non-convex zone).
         for zone in &input.goal.keep_out {
@@ -543,6 +623,37 @@ impl RoverBug {
                 ));
             }
         }
+    }
+
+    /// C-obstacles of the safety layer's hazard cells that the view's C-obstacles miss (rocks
+    /// whose cell means read below the step limit), grown only by half the rover's width plus
+    /// an allowance: grown like the others they would close the gaps of a rock field, and the
+    /// turns and drives near them are checked against the cells themselves. Cells under the
+    /// body at `pose` are left out: the rover stands there without contact.
+    fn top_obstacles(&self, pose: Pose2) -> Vec<CObstacle> {
+        let Some(mut mask) = self.safety_hazard.clone() else { return Vec::new() };
+        let growth = 0.5 * self.rover.width + self.config.top_allowance;
+        let g = mask.geometry;
+        let (half_l, half_w) = (0.5 * self.rover.length, 0.5 * self.rover.width);
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                if !*mask.get(c, r) {
+                    continue;
+                }
+                let (cx, cy) = g.center(c, r);
+                let q = Point2::new(cx, cy);
+                let b = pose.inverse_transform(q);
+                let under_body = b.x.abs() <= half_l && b.y.abs() <= half_w;
+                let covered =
+                    self.obstacles[..self.sensed_len].iter().any(|o| o.signed_clearance(q) <= -growth);
+                if under_body || covered {
+                    *mask.get_mut(c, r) = false;
+                }
+            }
+        }
+        let mut out = rovernav_perception::build_c_obstacles(&mask, growth, self.terrain.max_arc_step);
+        out.retain(|o| o.vertices.len() >= 3);
+        out
     }
 
     /// Motion-to-goal planning on the current view; false when a blocking obstacle stops it.
@@ -643,6 +754,29 @@ impl RoverBug {
             .map(|p| vec![x, p])
     }
 
+    /// The locally best way on (TangentBug's heuristic): the LTG path from the rover to a node
+    /// away from every position of this boundary-following segment that minimises its length
+    /// plus the node's distance to the goal, cut at the wedge radius.
+    fn best_exit(&self, x: Point2, goal: Point2) -> Option<Vec<Point2>> {
+        let ltg = self.build_ltg(x, goal);
+        let fresh = |p: Point2| p.dist(x) > 0.2 && self.visited.iter().all(|q| q.dist(p) > 0.5);
+        let path =
+            self.search_with(&ltg, goal, &|i, n: &Node| (i != 0 && fresh(n.p)).then(|| n.p.dist(goal)))?;
+        let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
+        let sub = self.truncate(&points, x);
+        (sub.len() >= 2).then_some(sub)
+    }
+
+    /// Whether the positions of this boundary-following segment (and `next`) wind around the
+    /// goal: a loop around an obstacle proves the goal unreachable only when the obstacle
+    /// encloses the goal; in clutter the rover can come back near `V_loop` around another one.
+    fn encircles_goal(&self, goal: Point2, next: Option<Point2>) -> bool {
+        let pts: Vec<Point2> = self.visited.iter().copied().chain(next).collect();
+        let winding: f64 =
+            pts.windows(2).map(|w| angle_diff(w[1].sub(goal).angle(), w[0].sub(goal).angle())).sum();
+        winding.abs() > 1.5 * PI
+    }
+
     /// The next mast wedge of a scan that alternates sides, k = 1, -1, 2, -2, ... in units of
     /// 2 alpha_mast from the goal direction; None once the scans overlap all around.
     fn next_scan(&self, scans: &[i32], sense: f64) -> Option<(i32, f64)> {
@@ -669,6 +803,15 @@ impl RoverBug {
             }
         }
         let Some((next, angle)) = self.next_scan(&scans, sense) else {
+            // No silhouette vertex in the interior of the conglomerate wedge: in clutter the
+            // blocking C-obstacles hide each other's silhouettes. Follow the best way on the
+            // local tangent graph instead; halt as trapped only when there is none.
+            if let Some(path) = self.best_exit(x, goal) {
+                let d_reach = x.dist(goal);
+                self.mode = Mode::Normal { sense, d_reach, v_loop: x, left_loop: false, scans: vec![0] };
+                self.execute(path);
+                return None;
+            }
             return self.halt(
                 Outcome::Unreachable,
                 "trapped: the mast scans overlap all around and no boundary vertex leads out",
@@ -678,6 +821,196 @@ impl RoverBug {
         scans.push(next);
         self.mode = Mode::Virtual { sense, scans };
         Some(self.sense(vec![Self::mast_at(pose, goal.sub(x).angle() + angle)]))
+    }
+
+    /// Safety-layer hazard cells (centres) that come within the body margin of the body
+    /// outline at any of `poses`, closer than they are at `start`. Cells under the bare body at
+    /// `start` are left out: the rover stands there without contact, so those are noise or too
+    /// low to matter, and counting them would forbid every motion; a cell already within the
+    /// margin beside the body only counts if the motion brings the body nearer.
+    fn motion_hazards(&self, start: Pose2, poses: &[Pose2]) -> Vec<Point2> {
+        let Some(hazard) = &self.safety_hazard else { return Vec::new() };
+        let g = hazard.geometry;
+        let (half_l, half_w) = (0.5 * self.rover.length, 0.5 * self.rover.width);
+        let m = self.config.body_margin;
+        let reach = (half_l + m).hypot(half_w + m);
+        // Chebyshev-style distance from the body rectangle (negative under the body).
+        let outside = |pose: &Pose2, q: Point2| {
+            let b = pose.inverse_transform(q);
+            (b.x.abs() - half_l).max(b.y.abs() - half_w)
+        };
+        let mut out: Vec<Point2> = Vec::new();
+        for pose in poses {
+            let (lo_x, lo_y) = (pose.x - reach, pose.y - reach);
+            let c0 = ((lo_x - g.origin_x) / g.resolution).floor().max(0.0) as usize;
+            let r0 = ((lo_y - g.origin_y) / g.resolution).floor().max(0.0) as usize;
+            let c1 = (((pose.x + reach - g.origin_x) / g.resolution).ceil().max(0.0) as usize).min(g.cols);
+            let r1 = (((pose.y + reach - g.origin_y) / g.resolution).ceil().max(0.0) as usize).min(g.rows);
+            for r in r0..r1 {
+                for c in c0..c1 {
+                    if !*hazard.get(c, r) {
+                        continue;
+                    }
+                    let (cx, cy) = g.center(c, r);
+                    let q = Point2::new(cx, cy);
+                    let before = outside(&start, q);
+                    let now = outside(pose, q);
+                    if before > 0.0
+                        && now <= m
+                        && now < before - 0.01
+                        && !out.iter().any(|o| o.dist(q) < 1e-9)
+                    {
+                        out.push(q);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The safety layer's hazard cells whose own points rise above (or fall below) the median
+    /// height of the sensed cells within the footprint radius by a fraction of the layer's step
+    /// limit. The step/slope model also marks ground-level cells of a window it finds hazardous
+    /// when the window is sparsely sensed (single points, planes tilted by a nearby rock);
+    /// those would pin the rover in place for nothing. The fraction stays well below one: the
+    /// wheels may stand lower than the median ground, so a rock that reads a little under the
+    /// limit above it can still touch the belly. Slope hazards are left to the C-obstacles.
+    fn confirm_hazards(&self) -> Option<Grid2<bool>> {
+        let safety = self.safety.as_ref()?;
+        let layers = safety.layers();
+        let mut out = layers.hazard.clone();
+        let g = out.geometry;
+        let limit = self.config.confirm_fraction * safety.config().clearance;
+        let k = (safety.config().footprint_radius / g.resolution).round() as isize;
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                if !*out.get(c, r) {
+                    continue;
+                }
+                let (x, y) = g.center(c, r);
+                let Some(cell) = safety.grid().at_world(x, y).filter(|cell| cell.count > 0) else {
+                    *out.get_mut(c, r) = false;
+                    continue;
+                };
+                let mut around: Vec<f64> = Vec::new();
+                for dr in -k..=k {
+                    for dc in -k..=k {
+                        let (qx, qy) = (x + dc as f64 * g.resolution, y + dr as f64 * g.resolution);
+                        if (dc * dc + dr * dr) as f64 <= (k * k) as f64
+                            && let Some(m) = safety.grid().at_world(qx, qy).and_then(|q| q.mean())
+                        {
+                            around.push(m);
+                        }
+                    }
+                }
+                around.sort_by(f64::total_cmp);
+                let ground = around.get(around.len() / 2).copied().unwrap_or(f64::NAN);
+                let stands_out = cell.max_z as f64 - ground > limit || ground - cell.min_z as f64 > limit;
+                *out.get_mut(c, r) = stands_out;
+            }
+        }
+        Some(out)
+    }
+
+    /// Whether the rover can turn in place toward `target` (either way round) and drive
+    /// straight to it without its body sweeping over a safety-layer hazard.
+    fn leg_clear(&self, target: Point2) -> bool {
+        let Some(pose) = self.here else { return true };
+        let d = target.sub(pose.position());
+        let error = angle_diff(d.angle(), pose.yaw);
+        if error.abs() <= self.config.turn_threshold {
+            // No turn: the drive is the arc the executor commands.
+            let (distance, curvature) = Self::arc_to(d.norm(), error);
+            return self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature)).is_empty();
+        }
+        let turned = Pose2::new(pose.x, pose.y, pose.yaw + error);
+        let turn_ok = self.motion_hazards(pose, &Self::turn_poses(pose, error)).is_empty()
+            || self
+                .motion_hazards(pose, &Self::turn_poses(pose, error - error.signum() * 2.0 * PI))
+                .is_empty();
+        turn_ok && self.motion_hazards(pose, &Self::arc_poses(turned, d.norm(), 0.0)).is_empty()
+    }
+
+    /// When planning gave up with the rover pinned by safety-layer hazards (it cannot turn
+    /// all the way round in place), a short straight drive out, backwards first (the way the
+    /// rover came), replaces the halt: the hazards restrict its turns, not the C-obstacles its
+    /// way. At most twice in one place.
+    fn escape(&mut self, pose: Pose2) -> Option<NavCommand> {
+        if self.stats.sensing_actions >= self.config.max_wedges {
+            return None;
+        }
+        let pinned = !self.motion_hazards(pose, &Self::turn_poses(pose, 2.0 * PI)).is_empty();
+        let x = pose.position();
+        let (count, at) = self.escapes;
+        let count = if at.dist(x) < 0.5 { count + 1 } else { 1 };
+        if !pinned || count > 2 {
+            return None;
+        }
+        let distance = [-self.config.escape_distance, self.config.escape_distance]
+            .into_iter()
+            .find(|&d| self.motion_hazards(pose, &Self::arc_poses(pose, d, 0.0)).is_empty())?;
+        self.escapes = (count, x);
+        self.finish = None;
+        self.mode = Mode::MotionToGoal;
+        self.last_motion = Some(distance.signum());
+        self.drive_from = Some(x);
+        Some(NavCommand::Drive { distance, curvature: 0.0, guard: DriveGuard::default() })
+    }
+
+    /// Length and curvature of the arc that starts along the current heading and ends at a
+    /// point `chord` metres away, `error` radians off the heading.
+    fn arc_to(chord: f64, error: f64) -> (f64, f64) {
+        let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
+        let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
+        (distance, curvature)
+    }
+
+    /// Poses along a turn in place by `angle` from `pose`, a few degrees apart.
+    fn turn_poses(pose: Pose2, angle: f64) -> Vec<Pose2> {
+        let n = (angle.abs() / 4f64.to_radians()).ceil().max(1.0) as usize;
+        (1..=n).map(|k| Pose2::new(pose.x, pose.y, pose.yaw + angle * k as f64 / n as f64)).collect()
+    }
+
+    /// Poses along an arc of signed length `distance` and `curvature` from `pose`, 5 cm apart.
+    fn arc_poses(pose: Pose2, distance: f64, curvature: f64) -> Vec<Pose2> {
+        let n = (distance.abs() / 0.05).ceil().max(1.0) as usize;
+        (1..=n)
+            .map(|k| {
+                let s = distance * k as f64 / n as f64;
+                let yaw = pose.yaw + curvature * s;
+                if curvature.abs() < 1e-9 {
+                    Pose2::new(pose.x + s * pose.yaw.cos(), pose.y + s * pose.yaw.sin(), pose.yaw)
+                } else {
+                    Pose2::new(
+                        pose.x + (yaw.sin() - pose.yaw.sin()) / curvature,
+                        pose.y - (yaw.cos() - pose.yaw.cos()) / curvature,
+                        yaw,
+                    )
+                }
+            })
+            .collect()
+    }
+
+    /// The new step to command instead of a motion the safety check refused (a later leg of
+    /// the subpath: the first leg of every plan is checked); after repeated refusals here,
+    /// backs out if it can (see [`Self::escape`]) or asks for help.
+    fn refuse(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
+        let x = pose.position();
+        self.waypoints.clear();
+        let (count, at) = self.refusals;
+        let count = if at.dist(x) < 0.3 { count + 1 } else { 1 };
+        self.refusals = (count, x);
+        if count > self.config.max_refusals_here {
+            if let Some(escape) = self.escape(pose) {
+                return escape;
+            }
+            return self.finish_now(
+                Outcome::HelpRequested,
+                "every motion from here sweeps the body over a sensed hazard",
+            );
+        }
+        // Replan on fresh sensing: the new plan's first leg is checked.
+        self.open_step(pose, goal)
     }
 
     /// Records a final outcome and returns the command that reports it.
@@ -699,6 +1032,7 @@ impl RoverBug {
             && self.segment_free(x, tg, x)
             && self.segment_visible(x, tg)
             && tg.dist(goal) <= self.d_leave.unwrap_or(f64::INFINITY) + 1e-9
+            && self.leg_clear(tg)
     }
 
     /// Normal boundary following: leave when a reachable node beats `d_reach`, halt when the
@@ -726,7 +1060,7 @@ impl RoverBug {
         }
         self.visited.push(x);
         left_loop |= x.dist(v_loop) > 2.0;
-        if left_loop && x.dist(v_loop) < 1.0 {
+        if left_loop && x.dist(v_loop) < 1.0 && self.encircles_goal(goal, None) {
             return self.halt(
                 Outcome::Unreachable,
                 "boundary following completed a loop around the obstacle (V_loop): the goal is unreachable",
@@ -734,7 +1068,7 @@ impl RoverBug {
         }
         if let Some((path, seen_reach, _)) = self.silhouette(x, goal, sense, false) {
             let target = *path.last().expect("non-empty subpath");
-            if left_loop && target.dist(v_loop) < 1.0 {
+            if left_loop && target.dist(v_loop) < 1.0 && self.encircles_goal(goal, Some(target)) {
                 return self.halt(
                     Outcome::Unreachable,
                     "boundary following reached V_loop again: the goal is unreachable",
@@ -749,7 +1083,7 @@ impl RoverBug {
             // The gaze has turned all around without a silhouette vertex in the interior of the
             // conglomerate wedge (paper: abort). In clutter, step instead to the most extreme
             // directly reachable node not yet visited; abort only when there is none.
-            if let Some(path) = self.fallback_step(x, goal, sense) {
+            if let Some(path) = self.fallback_step(x, goal, sense).or_else(|| self.best_exit(x, goal)) {
                 self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
                 self.execute(path);
                 return None;
@@ -891,11 +1225,20 @@ impl Navigator for RoverBug {
         }
         self.backing_out = false;
         if !input.frame.clouds.is_empty() {
+            self.here = Some(pose);
             self.ingest(input);
             if let Some((outcome, why)) = self.finish.clone() {
                 return NavCommand::Finish(outcome, why);
             }
-            if let Some(cmd) = self.plan(pose, goal) {
+            let cmd = self.plan(pose, goal);
+            let gave_up = match &self.finish {
+                Some((outcome, _)) => *outcome != Outcome::Reached,
+                None => cmd.is_none() && self.waypoints.is_empty(),
+            };
+            if gave_up && let Some(escape) = self.escape(pose) {
+                return escape;
+            }
+            if let Some(cmd) = cmd {
                 return cmd;
             }
             if let Some((outcome, why)) = self.finish.clone() {
@@ -925,14 +1268,25 @@ impl Navigator for RoverBug {
             }
             let error = angle_diff(next.sub(x).angle(), pose.yaw);
             if error.abs() > self.config.turn_threshold {
+                // The shorter way round, else the longer one, if the body's sweep is clear.
+                let long = error - error.signum() * 2.0 * PI;
+                let short_cells = self.motion_hazards(pose, &Self::turn_poses(pose, error));
+                let angle = if short_cells.is_empty() {
+                    error
+                } else if self.motion_hazards(pose, &Self::turn_poses(pose, long)).is_empty() {
+                    long
+                } else {
+                    return self.refuse(pose, goal);
+                };
                 self.last_motion = Some(2.0);
-                return NavCommand::Turn { angle: error };
+                return NavCommand::Turn { angle };
+            }
+            let (distance, curvature) = Self::arc_to(x.dist(next), error);
+            let cells = self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature));
+            if !cells.is_empty() {
+                return self.refuse(pose, goal);
             }
             self.waypoints.pop_front();
-            let chord = x.dist(next);
-            // The arc through `next` that starts along the current heading.
-            let curvature = if chord > 1e-6 { 2.0 * error.sin() / chord } else { 0.0 };
-            let distance = if error.abs() > 1e-6 { chord * error / error.sin() } else { chord };
             self.last_motion = Some(1.0);
             self.drive_from = Some(x);
             return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
@@ -1054,5 +1408,77 @@ mod tests {
         let last = *cut.last().unwrap();
         assert!((last.dist(x) - 4.0).abs() < 1e-9);
         assert!((last.x - 3.0).abs() < 1e-9 && (last.y - 7f64.sqrt()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn arc_poses_follow_the_circle_of_the_curvature() {
+        // Curvature 0.5 (radius 2) driven for half the circumference from the origin heading
+        // +x ends 4 m to the left, heading -x; a straight drive ends on the heading line.
+        let start = Pose2::new(0.0, 0.0, 0.0);
+        let end = *RoverBug::arc_poses(start, PI * 2.0, 0.5).last().unwrap();
+        assert!(end.x.abs() < 1e-9 && (end.y - 4.0).abs() < 1e-9, "{end:?}");
+        assert!(angle_diff(end.yaw, PI).abs() < 1e-9);
+        let back = *RoverBug::arc_poses(Pose2::new(1.0, 1.0, 0.5 * PI), -2.0, 0.0).last().unwrap();
+        assert!((back.x - 1.0).abs() < 1e-9 && (back.y + 1.0).abs() < 1e-9, "{back:?}");
+    }
+
+    /// A navigator at the origin heading +x whose safety layer holds the given hazard cells.
+    fn bug_with_hazards(cells: &[(f64, f64)]) -> RoverBug {
+        let mut bug = bug_with(vec![]);
+        let geometry = rovernav_core::GridGeometry {
+            cols: 60,
+            rows: 60,
+            resolution: 0.1,
+            origin_x: -3.0,
+            origin_y: -3.0,
+        };
+        let mut grid = Grid2::filled(geometry, false);
+        for &(x, y) in cells {
+            let (c, r) = geometry.cell_of(x, y).unwrap();
+            *grid.get_mut(c, r) = true;
+        }
+        bug.safety_hazard = Some(grid);
+        bug
+    }
+
+    #[test]
+    fn motion_check_follows_the_body_outline() {
+        // Default body 0.8 x 0.6 m, margin 0.08 m. A cell 0.45 m to the left of the centre is
+        // 0.15 m from the body's side: driving straight keeps it there, a quarter turn brings
+        // the front end to 0.05 m of it.
+        let start = Pose2::new(0.0, 0.0, 0.0);
+        let beside = bug_with_hazards(&[(0.05, 0.45)]);
+        assert!(beside.motion_hazards(start, &RoverBug::arc_poses(start, 1.0, 0.0)).is_empty());
+        assert!(beside.motion_hazards(start, &RoverBug::arc_poses(start, -1.0, 0.0)).is_empty());
+        assert_eq!(beside.motion_hazards(start, &RoverBug::turn_poses(start, 0.5 * PI)).len(), 1);
+        // A cell 0.95 m ahead is met driving 1 m forward, not backward.
+        let ahead = bug_with_hazards(&[(0.95, 0.05)]);
+        assert_eq!(ahead.motion_hazards(start, &RoverBug::arc_poses(start, 1.0, 0.0)).len(), 1);
+        assert!(ahead.motion_hazards(start, &RoverBug::arc_poses(start, -1.0, 0.0)).is_empty());
+        // A cell under the body where the rover stands never counts.
+        let under = bug_with_hazards(&[(0.15, 0.05)]);
+        assert!(under.motion_hazards(start, &RoverBug::turn_poses(start, PI)).is_empty());
+        assert!(under.motion_hazards(start, &RoverBug::arc_poses(start, 1.0, 0.0)).is_empty());
+    }
+
+    #[test]
+    fn a_loop_proves_unreachable_only_around_the_goal() {
+        let goal = Point2::new(0.0, 0.0);
+        let circle = |c: Point2, r: f64, turn: f64| -> Vec<Point2> {
+            (0..=24)
+                .map(|k| k as f64 * turn / 24.0)
+                .map(|t| c.add(Point2::new(t.cos(), t.sin()).scale(r)))
+                .collect()
+        };
+        let mut bug = bug_with(vec![]);
+        // 330 degrees around the goal.
+        bug.visited = circle(goal, 3.0, 330f64.to_radians());
+        assert!(bug.encircles_goal(goal, None));
+        // Half a turn around it is no loop yet.
+        bug.visited = circle(goal, 3.0, PI);
+        assert!(!bug.encircles_goal(goal, None));
+        // A full loop around a point 5 m away leaves the goal outside.
+        bug.visited = circle(Point2::new(5.0, 0.0), 2.0, 2.0 * PI);
+        assert!(!bug.encircles_goal(goal, None));
     }
 }
