@@ -9,7 +9,7 @@ use rovernav_core::{
     Grid2, GridGeometry, Overlay, OverlayKind, Point2, PointCloud, Pose2, PoseEstimate, RoverConfig,
 };
 use rovernav_mapping::WorldMap;
-use rovernav_perception::{HazardHeight, TerrainConfig, TerrainEvaluator};
+use rovernav_perception::{HazardHeight, SensorNoise, TerrainConfig, TerrainEvaluator};
 use rovernav_planning::{Cell, CostGrid};
 
 /// Fraction of the rover's clearance and tilt limits at which terrain counts as a hazard when
@@ -20,6 +20,11 @@ pub const HAZARD_MARGIN: f64 = 0.8;
 /// heights ([`HazardHeight::Top`]): that estimate is not biased low, so the margin only has to
 /// cover range noise and the wheels settling a few centimetres into the relief.
 pub const TOP_HAZARD_MARGIN: f64 = 0.9;
+
+/// Standard deviations of far-range height noise within which a raised cell on the cells' top
+/// heights counts as reaching the step limit: a rock of about the clearance seen from 3-5 m has
+/// only a few mast points on its near face, and its top cell reads a couple of centimetres low.
+pub const HAZARD_CONFIDENCE: f64 = 1.0;
 
 /// Cell size of the robot-centred grid (m): finer than MRPTA's 0.15 m so that rocks of a few
 /// decimetres, which a Rocky 7-sized rover cannot straddle, span several cells.
@@ -62,6 +67,10 @@ pub struct TerrainModel {
     world: WorldMap,
     /// Obstacle cells of the step/slope model, latest observation wins.
     hazard: Grid2<bool>,
+    /// Uncertain hazard cells (within far-range noise of the step limit), latest observation
+    /// wins: not walls for the planner, but the rover does not drive over one before a closer
+    /// look has settled it (see [`Self::footprint_seen`]).
+    suspect: Grid2<bool>,
     /// Cells whose hazard state has been assessed.
     assessed: Grid2<bool>,
     /// Cells that hold range points themselves (a window can assess a cell it has no points in).
@@ -103,6 +112,7 @@ impl TerrainModel {
             evaluator,
             world: WorldMap::unknown(geometry).expect("non-empty navigation map"),
             hazard: Grid2::filled(geometry, false),
+            suspect: Grid2::filled(geometry, false),
             assessed: Grid2::filled(geometry, false),
             observed: Grid2::filled(geometry, false),
             grown: Grid2::filled(geometry, false),
@@ -142,10 +152,14 @@ impl TerrainModel {
         safety_buffer: f64,
         hazard_height: HazardHeight,
     ) -> TerrainConfig {
-        let margin = if hazard_height == HazardHeight::Mean { HAZARD_MARGIN } else { TOP_HAZARD_MARGIN };
+        let mean = hazard_height == HazardHeight::Mean;
+        let margin = if mean { HAZARD_MARGIN } else { TOP_HAZARD_MARGIN };
         TerrainConfig {
             safety_buffer,
             hazard_height,
+            // The mean's wider margin already covers far-range noise.
+            range_noise: (!mean).then(SensorNoise::default),
+            hazard_confidence: if mean { 0.0 } else { HAZARD_CONFIDENCE },
             clearance: rover.clearance * margin,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
             resolution: T_GRID_RESOLUTION,
@@ -186,8 +200,10 @@ impl TerrainModel {
                     *self.observed.get_mut(c, r) = true;
                 }
                 if layers.step.data[i].is_finite() || layers.hazard.data[i] {
+                    let uncertain = layers.uncertain_hazard.data[i];
                     *self.assessed.get_mut(c, r) = true;
-                    *self.hazard.get_mut(c, r) = layers.hazard.data[i];
+                    *self.hazard.get_mut(c, r) = layers.hazard.data[i] && !uncertain;
+                    *self.suspect.get_mut(c, r) = uncertain;
                 }
             }
         }
@@ -306,8 +322,10 @@ impl TerrainModel {
     }
 
     /// Whether the body could stand at `p` on terrain it has seen: every cell within
-    /// [`FOOTPRINT_CHECK_M`] of `p` is assessed and either holds range points or is a one-cell
-    /// gap among cells that do. A footprint window assesses cells it has no points in, and a rock
+    /// [`FOOTPRINT_CHECK_M`] of `p` is assessed, is no uncertain hazard (a rock seen only from
+    /// afar whose top may reach the clearance: walling it off would box the rover in among the
+    /// many rocks just under the limit, driving over it unchecked may meet one above it), and
+    /// either holds range points or is a one-cell gap among cells that do. A footprint window assesses cells it has no points in, and a rock
     /// in an occlusion shadow is such a hole: driving over it on the strength of its neighbours
     /// is how a rover meets a rock it never saw. Cells within `exempt_radius` of `exempt` (the
     /// ground under the rover, which its cameras cannot see) are not checked.
@@ -333,7 +351,7 @@ impl TerrainModel {
                 if q.dist(p) > FOOTPRINT_CHECK_M || q.dist(exempt) <= exempt_radius {
                     continue;
                 }
-                if !*self.assessed.get(c as usize, r as usize) {
+                if !*self.assessed.get(c as usize, r as usize) || *self.suspect.get(c as usize, r as usize) {
                     return false;
                 }
                 if observed(c, r) {
@@ -396,6 +414,7 @@ impl TerrainModel {
                     let base = grid.cost(cell);
                     let _ = grid.set_cost(cell, base.max(1.0) * TIGHT_COST);
                 }
+
                 if mode == CostMode::Optimistic {
                     grid.set_sensed(cell, *self.assessed.get(c, r));
                 }
@@ -569,6 +588,16 @@ mod tests {
         assert!(m.footprint_seen(p, p, 0.4));
         // A hole 0.5 m away is outside the footprint check.
         assert!(m.footprint_seen(Point2::new(1.5, 1.0), Point2::new(-2.0, -2.0), 0.4));
+        // An uncertain hazard 0.3 m away must be looked at again before the rover stands there,
+        // but it is no wall for the planner.
+        let q = Point2::new(-1.0, -1.0);
+        assert!(m.footprint_seen(q, Point2::new(-2.0, -2.0), 0.4));
+        let (c, r) = g.cell_of(q.x + 0.3, q.y).unwrap();
+        *m.suspect.get_mut(c, r) = true;
+        m.grow_hazards();
+        assert!(!m.footprint_seen(q, Point2::new(-2.0, -2.0), 0.4));
+        let grid = m.cost_grid(CostMode::Optimistic, Point2::new(-2.5, -2.5), Point2::new(2.5, 2.5));
+        assert_eq!(grid.cost_at_point(grid.world_to_grid(q)), 1.0);
     }
 
     #[test]

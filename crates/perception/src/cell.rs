@@ -26,6 +26,9 @@ pub struct CellStats {
     sum_xz: f64,
     sum_yz: f64,
     sum_zz: f64,
+    /// Sum of the points' expected height-noise variances (m^2): zero for points added without
+    /// a noise figure.
+    sum_noise_var: f64,
 }
 
 impl Default for CellStats {
@@ -70,6 +73,7 @@ impl CellStats {
         sum_xz: 0.0,
         sum_yz: 0.0,
         sum_zz: 0.0,
+        sum_noise_var: 0.0,
     };
 
     /// Whether any point fell in the cell.
@@ -80,6 +84,16 @@ impl CellStats {
     /// Adds a point at offset `(dx, dy)` from the cell centre with world height `z`.
     #[inline]
     pub fn add(&mut self, dx: f64, dy: f64, z: f64) {
+        self.add_with_noise(dx, dy, z, 0.0);
+    }
+
+    /// [`Self::add`] for a point whose height is known to carry noise of variance `noise_var`
+    /// (m^2; negative or non-finite values count as zero).
+    #[inline]
+    pub fn add_with_noise(&mut self, dx: f64, dy: f64, z: f64, noise_var: f64) {
+        if noise_var.is_finite() && noise_var > 0.0 {
+            self.sum_noise_var += noise_var;
+        }
         if self.count == 0 {
             self.z_ref = z;
         }
@@ -101,6 +115,12 @@ impl CellStats {
     /// Mean point height (m), if sensed.
     pub fn mean(&self) -> Option<f64> {
         (self.count > 0).then(|| self.z_ref + self.sum_z / self.count as f64)
+    }
+
+    /// Mean expected height-noise variance of the points (m^2), if sensed: how much of
+    /// [`Self::variance`] range noise alone would explain.
+    pub fn noise_variance(&self) -> Option<f64> {
+        (self.count > 0).then(|| self.sum_noise_var / self.count as f64)
     }
 
     /// Population variance of the point heights (m^2), if sensed.
@@ -171,6 +191,7 @@ impl CellStats {
         self.sum_y += other.sum_y + n * dy;
         self.sum_z += sum_z;
         self.sum_zz += sum_zz;
+        self.sum_noise_var += other.sum_noise_var;
         if was_empty {
             self.min_z = other.min_z;
             self.max_z = other.max_z;
@@ -210,6 +231,22 @@ impl CellStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn noise_variance_is_the_mean_of_the_points_and_survives_merging() {
+        let mut a = CellStats::EMPTY;
+        assert_eq!(a.noise_variance(), None);
+        a.add_with_noise(0.0, 0.0, 1.0, 4e-4);
+        a.add(0.01, 0.0, 1.1);
+        assert!((a.noise_variance().unwrap() - 2e-4).abs() < 1e-12);
+        let mut b = CellStats::EMPTY;
+        b.add_with_noise(0.0, 0.01, 0.9, 1e-4);
+        b.add_with_noise(0.0, 0.0, 0.9, f64::NAN);
+        a.merge(&b);
+        // (4e-4 + 0 + 1e-4 + 0) over four points; the unusable figure counts as zero.
+        assert!((a.noise_variance().unwrap() - 1.25e-4).abs() < 1e-12);
+        assert_eq!(a.count, 4);
+    }
 
     #[test]
     fn mean_variance_and_extremes_match_hand_values() {

@@ -4,7 +4,7 @@ use crate::PerceptionError;
 use crate::footprint::FootprintParams;
 use crate::goodness::GoodnessParams;
 use crate::traversability::TraversabilityParams;
-use rovernav_core::RoverConfig;
+use rovernav_core::{CameraKind, RoverConfig};
 
 /// When the terrain evaluator asks for more range data (paper 004 section 3.3).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +52,58 @@ pub enum HazardHeight {
     Max,
 }
 
+/// Range error of one range sensor: standard deviation `constant + quadratic * r^2` at range `r`
+/// (stereo depth error grows with the square of range, a time-of-flight LIDAR's hardly at all).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RangeNoise {
+    /// Range-independent part of the standard deviation (m).
+    pub constant: f64,
+    /// Standard deviation per squared metre of range (1/m).
+    pub quadratic: f64,
+}
+
+impl RangeNoise {
+    /// Standard deviation of the range error at range `r` (m).
+    pub fn sigma(&self, r: f64) -> f64 {
+        self.constant + self.quadratic * r * r
+    }
+}
+
+/// The calibrated range error of each of the rover's range sensors.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorNoise {
+    /// Mast stereo pair.
+    pub mast: RangeNoise,
+    /// Front and rear body stereo pairs.
+    pub body: RangeNoise,
+    /// Nodding LIDAR.
+    pub lidar: RangeNoise,
+}
+
+impl Default for SensorNoise {
+    /// Stereo error `r^2 sigma_d / (f b)` of the rover's pairs (mast: ~0.2 m baseline, ~2 mrad
+    /// pixels, 0.4 px matching error; body pairs: wider field, shorter baseline, 2.5 times
+    /// that) and a 1.5 cm time-of-flight LIDAR.
+    fn default() -> Self {
+        Self {
+            mast: RangeNoise { constant: 0.0, quadratic: 0.004 },
+            body: RangeNoise { constant: 0.0, quadratic: 0.01 },
+            lidar: RangeNoise { constant: 0.015, quadratic: 0.0 },
+        }
+    }
+}
+
+impl SensorNoise {
+    /// The model of one sensor.
+    pub fn of(&self, camera: CameraKind) -> RangeNoise {
+        match camera {
+            CameraKind::Mast => self.mast,
+            CameraKind::BodyFront | CameraKind::BodyRear => self.body,
+            CameraKind::Lidar => self.lidar,
+        }
+    }
+}
+
 /// Everything terrain assessment needs: grid size, hazard limits and C-obstacle growth.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainConfig {
@@ -89,6 +141,14 @@ pub struct TerrainConfig {
     pub density: DensityConfig,
     /// Which height of each cell the step/slope hazard model runs on.
     pub hazard_height: HazardHeight,
+    /// Per-sensor range error; when set, each point carries the height noise its range and
+    /// viewing angle imply, and [`HazardHeight::Top`] discounts that instead of `sensor_noise`
+    /// alone.
+    pub range_noise: Option<SensorNoise>,
+    /// Standard deviations of a cell's height noise beyond `sensor_noise` (from `range_noise`)
+    /// within which a raised cell counts as reaching the step limit; such hazards are flagged
+    /// uncertain. 0 = the measured height must exceed the limit itself.
+    pub hazard_confidence: f64,
 }
 
 impl Default for TerrainConfig {
@@ -119,6 +179,8 @@ impl TerrainConfig {
             safety_buffer: 0.1,
             max_arc_step: 30f64.to_radians(),
             density: DensityConfig::default(),
+            range_noise: None,
+            hazard_confidence: 0.0,
         }
     }
 
@@ -159,6 +221,7 @@ impl TerrainConfig {
         let non_negative = [
             ("sensor_noise", self.sensor_noise),
             ("safety_buffer", self.safety_buffer),
+            ("hazard_confidence", self.hazard_confidence),
             ("density.near", self.density.near),
             ("density.min_points_per_m2", self.density.min_points_per_m2),
         ];
@@ -168,6 +231,27 @@ impl TerrainConfig {
                     field,
                     reason: format!("must be finite and >= 0, got {v}"),
                 });
+            }
+        }
+        if let Some(noise) = &self.range_noise {
+            for (field, v) in [
+                ("range_noise.mast", noise.mast),
+                ("range_noise.body", noise.body),
+                ("range_noise.lidar", noise.lidar),
+            ] {
+                if !(v.constant.is_finite()
+                    && v.constant >= 0.0
+                    && v.quadratic.is_finite()
+                    && v.quadratic >= 0.0)
+                {
+                    return Err(PerceptionError::InvalidConfig {
+                        field,
+                        reason: format!(
+                            "needs finite terms >= 0, got constant {} and quadratic {}",
+                            v.constant, v.quadratic
+                        ),
+                    });
+                }
             }
         }
         if self.density.sectors == 0 || self.density.near >= self.density.far {
@@ -219,5 +303,23 @@ impl TerrainConfig {
     /// Distance C-obstacles are grown by: rover radius plus safety buffer (m).
     pub fn growth(&self) -> f64 {
         self.rover_radius + self.safety_buffer
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_negative_range_noise_term_is_named() {
+        let mut config =
+            TerrainConfig { range_noise: Some(SensorNoise::default()), ..TerrainConfig::default() };
+        assert!(config.validate().is_ok());
+        config.range_noise.as_mut().unwrap().body.quadratic = -0.01;
+        let err = config.validate().unwrap_err();
+        assert!(matches!(err, PerceptionError::InvalidConfig { field: "range_noise.body", .. }), "{err:?}");
+        // The stereo model grows with the square of range.
+        let mast = SensorNoise::default().of(CameraKind::Mast);
+        assert!((mast.sigma(5.0) - 4.0 * mast.sigma(2.5)).abs() < 1e-12);
     }
 }

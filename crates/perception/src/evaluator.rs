@@ -5,14 +5,17 @@
 //! Each update recentres the T-grid on the pose estimate (cells falling off the grid are cleared,
 //! nothing is copied), bins the new points into the cells' running sums, and reassesses the
 //! whole window with flat arrays: per-cell statistics, the footprint step/slope model, MRPTA
-//! traversability and GESTALT goodness.
+//! traversability and GESTALT goodness. With a per-sensor range-noise model each point carries
+//! the height noise its range implies (stereo error grows with range squared), and a raised cell
+//! within that noise (beyond what the hazard margin covers) of the step limit becomes an
+//! uncertain hazard: a few far points on a rock's near face read its crest low.
 
 use crate::PerceptionError;
 use crate::cell::CellStats;
 use crate::cobstacle::{CObstacle, SensedWedge, build_c_obstacles, label_c_obstacles};
-use crate::config::{HazardHeight, TerrainConfig};
+use crate::config::{HazardHeight, RangeNoise, TerrainConfig};
 use crate::elevation::world_points;
-use crate::footprint::analyse_footprints;
+use crate::footprint::analyse_footprints_with_tolerance;
 use crate::goodness::goodness_layer;
 use crate::traversability::traversability_layer;
 use rovernav_core::{
@@ -27,6 +30,10 @@ pub struct TerrainLayers {
     pub map: LocalMap,
     /// Obstacle cells of the step/slope model (the hazard classification).
     pub hazard: Grid2<bool>,
+    /// Hazard cells whose measured height stays under the step limit but whose height noise
+    /// (see [`TerrainConfig::hazard_confidence`]) leaves room for a step over it; a closer look
+    /// settles them.
+    pub uncertain_hazard: Grid2<bool>,
     /// Step within the footprint window centred on each cell (m; NaN not assessed).
     pub step: Grid2<f32>,
     /// Slope of the footprint plane centred on each cell (rad; NaN not assessed).
@@ -53,6 +60,7 @@ impl TerrainLayers {
                 goodness: Grid2::filled(geometry, f32::NAN),
             },
             hazard: Grid2::filled(geometry, false),
+            uncertain_hazard: Grid2::filled(geometry, false),
             step: Grid2::filled(geometry, f32::NAN),
             slope: Grid2::filled(geometry, f32::NAN),
             roughness: Grid2::filled(geometry, f32::NAN),
@@ -100,7 +108,19 @@ pub fn assess_cells<'a>(
         HazardHeight::Max => stats.iter().map(|c| if c.count > 0 { c.max_z } else { f32::NAN }).collect(),
         HazardHeight::Top => stats.iter().map(|c| top_height(c, noise_var)).collect(),
     };
-    let footprint = analyse_footprints(&hazard_heights, cols, rows, res, &config.footprint_params());
+    let tolerance: Vec<f32> = if config.hazard_confidence > 0.0 {
+        stats.iter().map(|c| (config.hazard_confidence * excess_noise_sigma(c, noise_var)) as f32).collect()
+    } else {
+        Vec::new()
+    };
+    let footprint = analyse_footprints_with_tolerance(
+        &hazard_heights,
+        &tolerance,
+        cols,
+        rows,
+        res,
+        &config.footprint_params(),
+    );
     let traversability =
         traversability_layer(&stats, &heights, cols, rows, res, centre, &config.traversability_params());
     let goodness = goodness_layer(&heights, &footprint, &config.goodness_params());
@@ -115,6 +135,7 @@ pub fn assess_cells<'a>(
             goodness: grid(goodness),
         },
         hazard: Grid2 { geometry, data: footprint.obstacle },
+        uncertain_hazard: Grid2 { geometry, data: footprint.uncertain },
         step: grid(footprint.step),
         slope: grid(footprint.slope),
         roughness: grid(footprint.roughness),
@@ -132,6 +153,24 @@ fn top_height(cell: &CellStats, noise_var: f64) -> f32 {
         }
         _ => mean,
     }
+}
+
+/// Height noise of a cell's points beyond the configured `sensor_noise` (variance `noise_var`),
+/// as a standard deviation (m): far-range stereo points scatter more than the hazard margin
+/// was set for, and a cell holding only a few of them can miss a rock's crest by about that.
+fn excess_noise_sigma(cell: &CellStats, noise_var: f64) -> f64 {
+    cell.noise_variance().map_or(0.0, |v| (v - noise_var).max(0.0).sqrt())
+}
+
+/// Variance of a range point's height (m^2) under a range error along the ray from `sensor`
+/// (world frame): the error's vertical share is the ray's steepness.
+fn height_noise_variance(noise: &RangeNoise, sensor: [f64; 3], p: [f64; 3]) -> f64 {
+    let d = [p[0] - sensor[0], p[1] - sensor[1], p[2] - sensor[2]];
+    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if !(r.is_finite() && r > 0.0) {
+        return 0.0;
+    }
+    (noise.sigma(r) * d[2].abs() / r).powi(2)
 }
 
 /// A request for more range data: the sparsest sector in front of the rover is below the
@@ -205,10 +244,13 @@ impl TerrainEvaluator {
 
     /// Bins a body-frame cloud placed with the pose estimate `pose`; returns the points kept.
     pub fn insert_cloud(&mut self, cloud: &PointCloud, pose: &Pose3) -> usize {
+        let noise = self.config.range_noise.map(|n| n.of(cloud.camera));
+        let sensor = pose.transform(cloud.origin);
         let mut kept = 0;
         for p in world_points(cloud, pose) {
             if let Some((slot, centre)) = self.grid.locate(p[0], p[1]) {
-                self.grid.slot_mut(slot).add(p[0] - centre.x, p[1] - centre.y, p[2]);
+                let noise_var = noise.map_or(0.0, |n| height_noise_variance(&n, sensor, p));
+                self.grid.slot_mut(slot).add_with_noise(p[0] - centre.x, p[1] - centre.y, p[2], noise_var);
                 kept += 1;
             }
         }
@@ -325,6 +367,35 @@ mod tests {
         let cells = straddled_rock(rock, noise);
         let layers = assess_cells(geometry, cells.iter(), (7, 7), Pose2::new(0.75, 0.75, 0.0), &config);
         layers.hazard.data.iter().any(|&h| h)
+    }
+
+    #[test]
+    fn height_noise_is_the_vertical_share_of_the_range_error() {
+        let mast = RangeNoise { constant: 0.0, quadratic: 0.004 };
+        // Sensor 1.2 m up, ground point 1.6 m out: range 2 m, sigma_r = 0.016 m, of which the
+        // share 1.2 / 2 is vertical.
+        let (sensor, p) = ([0.0, 0.0, 1.2], [1.6, 0.0, 0.0]);
+        let expected = (0.016f64 * 0.6).powi(2);
+        assert!((height_noise_variance(&mast, sensor, p) - expected).abs() < 1e-12);
+        // A level ray carries no height error; a point at the sensor none at all.
+        assert_eq!(height_noise_variance(&mast, [0.0, 0.0, 0.0], [3.0, 4.0, 0.0]), 0.0);
+        assert_eq!(height_noise_variance(&mast, sensor, sensor), 0.0);
+    }
+
+    #[test]
+    fn far_points_raise_a_cell_within_tolerance_near_points_do_not() {
+        // A cell of four points whose expected noise is 2.2 cm (mast at ~4.5 m) and one whose
+        // noise is 5 mm (close range), against the 1 cm the hazard margin covers.
+        let cell = |sigma: f64| {
+            let mut c = CellStats::EMPTY;
+            (0..4).for_each(|k| c.add_with_noise(0.0, 0.0, 0.01 * k as f64, sigma * sigma));
+            c
+        };
+        let noise_var = 1e-4;
+        let far = excess_noise_sigma(&cell(0.022), noise_var);
+        assert!((far - (0.022f64.powi(2) - 1e-4).sqrt()).abs() < 1e-9);
+        assert_eq!(excess_noise_sigma(&cell(0.005), noise_var), 0.0);
+        assert_eq!(excess_noise_sigma(&CellStats::EMPTY, noise_var), 0.0);
     }
 
     #[test]

@@ -60,6 +60,9 @@ pub struct FootprintLayers {
     pub roughness: Vec<f32>,
     /// Cells that are obstacles (cause a step or slope hazard).
     pub obstacle: Vec<bool>,
+    /// Obstacle cells that reach the step limit only within their height tolerance: their
+    /// measured height stays under it (all false without tolerances).
+    pub uncertain: Vec<bool>,
 }
 
 /// Number of running sums kept per integral-image entry.
@@ -221,6 +224,12 @@ fn fit_ground(cells: &[WindowCell]) -> Option<(f64, f64, f64)> {
     Some((mz - b * mx - c * my, b, c))
 }
 
+/// Tolerance of cell `i` (m): zero when missing, negative or not finite.
+#[inline]
+fn tolerance_at(tolerance: &[f32], i: usize) -> f64 {
+    tolerance.get(i).map_or(0.0, |&t| if t.is_finite() { t.max(0.0) as f64 } else { 0.0 })
+}
+
 /// Marks the cells of a hazardous window that stand more than `limit` above or below the
 /// ground.
 ///
@@ -228,11 +237,13 @@ fn fit_ground(cells: &[WindowCell]) -> Option<(f64, f64, f64)> {
 /// in one corner, a pit, one side of a ledge), which can make open ground look raised. So the
 /// ground plane is refitted without the cells lying more than `limit / 2` off it, until that set
 /// stops changing: what remains is the surface the wheels rest on. Cells more than `limit` off
-/// that plane are obstacles: rocks, pits, and the far side of a ledge. Returns the ground
-/// plane's gradient `(b, c)` (m per cell).
+/// that plane are obstacles: rocks, pits, and the far side of a ledge; cells that reach `limit`
+/// above it only with their `tolerance` added go to `uncertain`. Returns the ground plane's
+/// gradient `(b, c)` (m per cell).
 #[allow(clippy::too_many_arguments)]
 fn mark_off_ground_cells(
     heights: &[f32],
+    tolerance: &[f32],
     cols: usize,
     (c0, c1, r0, r1): (usize, usize, usize, usize),
     z_ref: f64,
@@ -240,6 +251,7 @@ fn mark_off_ground_cells(
     limit: f64,
     scratch: &mut Vec<WindowCell>,
     obstacle: &mut [bool],
+    uncertain: &mut [bool],
 ) -> (f64, f64) {
     scratch.clear();
     for rr in r0..r1 {
@@ -268,8 +280,15 @@ fn mark_off_ground_cells(
         }
     }
     for w in scratch.iter() {
-        if (w.z - (a + b * w.col as f64 + c * w.row as f64)).abs() > limit {
-            obstacle[w.row * cols + w.col] = true;
+        let i = w.row * cols + w.col;
+        let t = tolerance_at(tolerance, i);
+        let off = w.z - (a + b * w.col as f64 + c * w.row as f64);
+        if off.abs() > limit {
+            obstacle[i] = true;
+        } else if off + t > limit {
+            // Only upwards: a sparse cell's top misses the crest of a rock seen from one side,
+            // while a low cell is already set apart by its own measured depth.
+            uncertain[i] = true;
         }
     }
     (b, c)
@@ -283,6 +302,22 @@ pub fn analyse_footprints(
     resolution: f64,
     params: &FootprintParams,
 ) -> FootprintLayers {
+    analyse_footprints_with_tolerance(heights, &[], cols, rows, resolution, params)
+}
+
+/// [`analyse_footprints`] where a cell also counts as an obstacle once it stands within its
+/// `tolerance` (m, row-major; missing or non-finite entries count as zero) of the step limit
+/// above the ground: a cell whose height is uncertain by about that much may hide a step above
+/// the limit. Such cells are flagged in [`FootprintLayers::uncertain`]; the step layer stays the
+/// measured one.
+pub fn analyse_footprints_with_tolerance(
+    heights: &[f32],
+    tolerance: &[f32],
+    cols: usize,
+    rows: usize,
+    resolution: f64,
+    params: &FootprintParams,
+) -> FootprintLayers {
     let k = params.half_window;
     let (planes, z_ref) = fit_planes(heights, cols, rows, resolution, k, params.min_cells);
     let n = cols * rows;
@@ -291,7 +326,11 @@ pub fn analyse_footprints(
         slope: vec![f32::NAN; n],
         roughness: vec![f32::NAN; n],
         obstacle: vec![false; n],
+        uncertain: vec![false; n],
     };
+    // Cells some window finds within tolerance of the limit; those another window finds over it
+    // on their measured height are plain obstacles.
+    let mut uncertain = vec![false; n];
     let mut scratch = Vec::with_capacity((2 * k + 1) * (2 * k + 1));
     for r in 0..rows {
         let (r0, r1) = window(r, k, rows);
@@ -307,11 +346,15 @@ pub fn analyse_footprints(
                 h.is_finite().then_some(h as f64 - z_ref - (p.a + p.b * cc as f64 + p.c * rr as f64))
             };
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            // The highest residual raised by its cell's tolerance: whether the window may hold a
+            // step above the limit.
+            let mut hi_tol = f64::NEG_INFINITY;
             for rr in r0..r1 {
                 for cc in c0..c1 {
                     if let Some(e) = residual(cc, rr) {
                         lo = lo.min(e);
                         hi = hi.max(e);
+                        hi_tol = hi_tol.max(e + tolerance_at(tolerance, rr * cols + cc));
                     }
                 }
             }
@@ -323,9 +366,10 @@ pub fn analyse_footprints(
             // protrudes, the ground plane under it (a rock at the window's edge tilts the
             // whole-window plane without making the ground steep).
             let mut ground_slope = p.slope;
-            if step > params.step_limit {
+            if step > params.step_limit || hi_tol - lo > params.step_limit {
                 let (gb, gc) = mark_off_ground_cells(
                     heights,
+                    tolerance,
                     cols,
                     (c0, c1, r0, r1),
                     z_ref,
@@ -333,6 +377,7 @@ pub fn analyse_footprints(
                     params.step_limit,
                     &mut scratch,
                     &mut out.obstacle,
+                    &mut uncertain,
                 );
                 ground_slope = (gb.hypot(gc) / resolution).atan();
             }
@@ -340,6 +385,10 @@ pub fn analyse_footprints(
                 out.obstacle[i] = true;
             }
         }
+    }
+    for ((o, u), &maybe) in out.obstacle.iter_mut().zip(out.uncertain.iter_mut()).zip(&uncertain) {
+        *u = maybe && !*o;
+        *o |= maybe;
     }
     out
 }
@@ -400,6 +449,32 @@ mod tests {
         }
         // The window centred on the rock sees the full 0.25 m step about its plane.
         assert!((out.step[11 * 25 + 11] - 0.25).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_tolerance_flags_a_cell_just_under_the_limit_as_uncertain_and_only_upwards() {
+        // Flat ground with a 0.17 m bump at (10, 10) and a 0.17 m pit at (5, 5), limit 0.18.
+        let mut h = grid(25, 25, |_, _| 0.0);
+        h[10 * 25 + 10] = 0.17;
+        h[5 * 25 + 5] = -0.17;
+        let plain = analyse_footprints(&h, 25, 25, 0.15, &params());
+        assert!(plain.obstacle.iter().all(|&o| !o), "both stay under the limit as measured");
+        // 2 cm of tolerance everywhere: the bump may reach 0.19 m, the pit is no rock.
+        let tol = vec![0.02f32; 25 * 25];
+        let out = analyse_footprints_with_tolerance(&h, &tol, 25, 25, 0.15, &params());
+        for i in 0..25 * 25 {
+            assert_eq!(out.obstacle[i], i == 10 * 25 + 10, "cell {i}");
+            assert_eq!(out.uncertain[i], out.obstacle[i], "cell {i}");
+        }
+        // 5 mm is not enough to reach the limit.
+        let small = vec![0.005f32; 25 * 25];
+        let out = analyse_footprints_with_tolerance(&h, &small, 25, 25, 0.15, &params());
+        assert!(out.obstacle.iter().all(|&o| !o));
+        // A bump over the limit is a plain obstacle, whatever its tolerance.
+        h[10 * 25 + 10] = 0.25;
+        let out = analyse_footprints_with_tolerance(&h, &tol, 25, 25, 0.15, &params());
+        assert!(out.obstacle[10 * 25 + 10] && !out.uncertain[10 * 25 + 10]);
+        assert_eq!(out.step, analyse_footprints(&h, 25, 25, 0.15, &params()).step);
     }
 
     #[test]

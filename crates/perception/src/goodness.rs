@@ -68,6 +68,7 @@ mod tests {
             slope: vec![0.0, 0.0],
             roughness: vec![0.0, 0.0],
             obstacle: vec![false, false],
+            uncertain: vec![false, false],
         };
         let g = goodness_layer(&[0.0, f32::NAN], &fp, &p());
         assert_eq!(g[0], 1.0);

@@ -30,7 +30,7 @@ pub use cobstacle::{
     CObstacle, SensedWedge, VertexLabel, build_c_obstacles, grow_convex_polygon, label_c_obstacles,
     obstacle_regions, segment_intersection, segments_intersect,
 };
-pub use config::{DensityConfig, HazardHeight, TerrainConfig};
+pub use config::{DensityConfig, HazardHeight, RangeNoise, SensorNoise, TerrainConfig};
 pub use elevation::{ElevationMap, world_points};
 pub use error::PerceptionError;
 pub use evaluation::{TerrainEvalFigures, TrueRock, evaluate_terrain};

@@ -6,7 +6,8 @@ use common::{Rock, Scene, Shape, Shot, cast};
 use rovernav_core::{GridGeometry, Point2, Pose2, Pose3, PoseEstimate, Wedge};
 use rovernav_mapping::WorldMap;
 use rovernav_perception::{
-    ElevationMap, SensedWedge, TerrainConfig, TerrainEvaluator, TrueRock, evaluate_terrain,
+    ElevationMap, HazardHeight, SensedWedge, SensorNoise, TerrainConfig, TerrainEvaluator, TrueRock,
+    evaluate_terrain,
 };
 
 fn estimate(pose: Pose3) -> PoseEstimate {
@@ -214,4 +215,53 @@ fn map_manager_fuses_evaluator_output_and_data_survives_driving() {
     assert!(!behind.sensed && behind.traversability.is_none());
     assert_eq!(world.planning_traversability_at(-5.0, 0.0), Some(7));
     let _ = Pose2::default();
+}
+
+/// Hazard cells of one sparse, noisy mast wedge over flat ground with a dome of `height` 3.8 m
+/// ahead, assessed on top heights at `clearance` with the given height-noise confidence.
+fn far_dome_hazards(height: f64, confidence: f64, seed: u64) -> (Vec<(Point2, bool)>, Point2) {
+    let rock = Rock { x: 3.8, y: 0.2, size: 0.38, height, shape: Shape::Dome };
+    let scene = Scene { rocks: vec![rock], ..Default::default() };
+    let pose = Pose3::default();
+    // One or two points per 0.1 m cell at 3.8 m, as the mast delivers there.
+    let cloud = cast(&scene, &Shot::mast(pose, 40, 45, 0.02, seed));
+    let config = TerrainConfig {
+        resolution: 0.1,
+        clearance: 0.162,
+        hazard_height: HazardHeight::Top,
+        range_noise: Some(SensorNoise::default()),
+        hazard_confidence: confidence,
+        ..TerrainConfig::default()
+    };
+    let mut ev = TerrainEvaluator::new(config, pose.pose2()).unwrap();
+    let layers = ev.update(&[cloud], &estimate(pose)).clone();
+    let g = layers.geometry();
+    let mut cells = Vec::new();
+    for r in 0..g.rows {
+        for c in 0..g.cols {
+            let i = g.index(c, r);
+            if layers.hazard.data[i] {
+                let (x, y) = g.center(c, r);
+                cells.push((Point2::new(x, y), layers.uncertain_hazard.data[i]));
+            }
+        }
+    }
+    (cells, Point2::new(rock.x, rock.y))
+}
+
+#[test]
+fn the_far_range_noise_allowance_keeps_open_ground_and_low_rocks_clear() {
+    for seed in 1..=4 {
+        // A 0.19 m dome (over the 0.18 m true clearance) is found, as an uncertain hazard or a
+        // measured one, and every hazard cell lies on or next to it.
+        let (cells, rock) = far_dome_hazards(0.19, 1.0, seed);
+        assert!(cells.iter().any(|(p, _)| p.dist(rock) <= 0.25), "seed {seed}: rock missed");
+        assert!(cells.iter().all(|(p, _)| p.dist(rock) <= 0.4), "seed {seed}: {cells:?}");
+        // A 0.1 m dome is well under the limit even with the noise allowance.
+        let (cells, _) = far_dome_hazards(0.1, 1.0, seed);
+        assert!(cells.is_empty(), "seed {seed}: {cells:?}");
+        // Without the allowance nothing is flagged uncertain.
+        let (cells, _) = far_dome_hazards(0.19, 0.0, seed);
+        assert!(cells.iter().all(|&(_, uncertain)| !uncertain));
+    }
 }

@@ -4,7 +4,9 @@
 //! (eight 45 deg wedges) and both body pairs; the navigators' terrain evaluator turns the points
 //! into elevation and hazard layers, placed with the pose the operators gave the rover. Recall of
 //! hazard rocks (taller than the true clearance) within 5 m, the false-hazard rate over truly
-//! safe sensed cells and the elevation RMSE are pooled over all seeds.
+//! safe sensed cells and the elevation RMSE are pooled over all seeds. Hazard cells include the
+//! uncertain ones (raised to within far-range noise of the clearance), which the navigators
+//! never drive over before a closer look has settled them.
 
 use anyhow::Context;
 use rovernav_core::{NavCommand, Point2, Pose3, PoseEstimate, SenseRequest};
