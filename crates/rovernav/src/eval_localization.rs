@@ -237,18 +237,19 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
     let mut results = results.into_inner().expect("results");
     results.sort_by_key(|r| r.0);
     let loop_s = t.elapsed().as_secs_f64();
+    // An empty float sum is -0.0; adding 0.0 prints figures of no runs as 0.
     let pct = |f: &dyn Fn(&(u64, LoopResult, LoopResult)) -> &LoopResult| {
         let n = results.len().max(1) as f64;
-        results.iter().map(|r| 100.0 * f(r).error_m / f(r).distance_m.max(1e-9)).sum::<f64>() / n
+        results.iter().map(|r| 100.0 * f(r).error_m / f(r).distance_m.max(1e-9)).sum::<f64>() / n + 0.0
     };
     let ml_pct = pct(&|r| &r.1);
     let dr_pct = pct(&|r| &r.2);
     let n = results.len().max(1) as f64;
-    let nees = results.iter().map(|r| r.1.nees).filter(|v| v.is_finite()).sum::<f64>() / n;
+    let nees = results.iter().map(|r| r.1.nees).filter(|v| v.is_finite()).sum::<f64>() / n + 0.0;
     let within_3sigma = results.iter().filter(|r| r.1.nees <= 11.8).count() as f64 / n;
     let fixes_used: u64 = results.iter().map(|r| r.1.fixes_used).sum();
     let fixes_rejected: u64 = results.iter().map(|r| r.1.fixes_rejected).sum();
-    let distance = results.iter().map(|r| r.1.distance_m).sum::<f64>() / n;
+    let distance = results.iter().map(|r| r.1.distance_m).sum::<f64>() / n + 0.0;
     let reached = results.iter().filter(|r| r.1.reached).count();
 
     let figures = serde_json::json!({
