@@ -178,7 +178,7 @@ pub struct RoverBug {
     /// The safety layer's hazard cells that stand out from the ground around them (see
     /// [`RoverBug::confirm_hazards`]).
     safety_hazard: Option<Grid2<bool>>,
-    /// Motions refused by the safety check since the last one commanded, and where.
+    /// Motions refused by the safety check at this place (the count restarts 0.3 m away), and where.
     refusals: (u32, Point2),
     /// Escapes from a boxed-in position, and where the last one started.
     escapes: (u32, Point2),
@@ -1231,9 +1231,17 @@ impl Navigator for RoverBug {
                 return NavCommand::Finish(outcome, why);
             }
             let cmd = self.plan(pose, goal);
+            // Resting at a vertex of the goal's C-obstacle is arrival, not a reason to back out.
+            let at_goal_vertex = cmd.is_none()
+                && self.waypoints.is_empty()
+                && self.obstacles.iter().any(|o| o.contains_strict(goal))
+                && self
+                    .obstacles
+                    .iter()
+                    .any(|o| o.contains(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3));
             let gave_up = match &self.finish {
                 Some((outcome, _)) => *outcome != Outcome::Reached,
-                None => cmd.is_none() && self.waypoints.is_empty(),
+                None => cmd.is_none() && self.waypoints.is_empty() && !at_goal_vertex,
             };
             if gave_up && let Some(escape) = self.escape(pose) {
                 return escape;
@@ -1246,12 +1254,7 @@ impl Navigator for RoverBug {
             }
             if self.waypoints.is_empty() {
                 // Nothing to do from here: the goal vertex was reached, or no plan exists.
-                if self.obstacles.iter().any(|o| o.contains_strict(goal))
-                    && self
-                        .obstacles
-                        .iter()
-                        .any(|o| o.contains(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3))
-                {
+                if at_goal_vertex {
                     return NavCommand::Finish(
                         Outcome::Reached,
                         "at a vertex of the goal's C-obstacle".into(),

@@ -325,10 +325,11 @@ impl TerrainModel {
     /// [`FOOTPRINT_CHECK_M`] of `p` is assessed, is no uncertain hazard (a rock seen only from
     /// afar whose top may reach the clearance: walling it off would box the rover in among the
     /// many rocks just under the limit, driving over it unchecked may meet one above it), and
-    /// either holds range points or is a one-cell gap among cells that do. A footprint window assesses cells it has no points in, and a rock
-    /// in an occlusion shadow is such a hole: driving over it on the strength of its neighbours
-    /// is how a rover meets a rock it never saw. Cells within `exempt_radius` of `exempt` (the
-    /// ground under the rover, which its cameras cannot see) are not checked.
+    /// either holds range points or is a one-cell gap among cells that do. A footprint window
+    /// assesses cells it has no points in, and a rock in an occlusion shadow is such a hole:
+    /// driving over it on the strength of its neighbours is how a rover meets a rock it never
+    /// saw. Cells within `exempt_radius` of `exempt` (the ground under the rover, which its
+    /// cameras cannot see) are not checked.
     pub fn footprint_seen(&self, p: Point2, exempt: Point2, exempt_radius: f64) -> bool {
         let g = self.hazard.geometry;
         let Some((c0, r0)) = g.cell_of(p.x, p.y) else { return false };
@@ -414,7 +415,6 @@ impl TerrainModel {
                     let base = grid.cost(cell);
                     let _ = grid.set_cost(cell, base.max(1.0) * TIGHT_COST);
                 }
-
                 if mode == CostMode::Optimistic {
                     grid.set_sensed(cell, *self.assessed.get(c, r));
                 }

@@ -260,8 +260,5 @@ fn the_far_range_noise_allowance_keeps_open_ground_and_low_rocks_clear() {
         // A 0.1 m dome is well under the limit even with the noise allowance.
         let (cells, _) = far_dome_hazards(0.1, 1.0, seed);
         assert!(cells.is_empty(), "seed {seed}: {cells:?}");
-        // Without the allowance nothing is flagged uncertain.
-        let (cells, _) = far_dome_hazards(0.19, 0.0, seed);
-        assert!(cells.iter().all(|&(_, uncertain)| !uncertain));
     }
 }

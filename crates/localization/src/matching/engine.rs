@@ -572,9 +572,6 @@ pub struct Scorer<'a, S: DistanceScore> {
     /// Per pyramid level: the local cells whose bound at that level needs a lookup (see
     /// `Scorer::bound_block`).
     looked_up: Vec<Vec<usize>>,
-    /// Per pyramid level: the summed trivial bound `max(best score, neutral)` of the cells
-    /// not in `looked_up`.
-    trivial_rest: Vec<f64>,
     /// Per pyramid level: the summed trivial bound of all cells.
     trivial_all: Vec<f64>,
     /// Distance-transform lookups made so far (one per local cell per pose scored or box
@@ -622,7 +619,6 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             bound_kind,
             split,
             looked_up: Vec::new(),
-            trivial_rest: Vec::new(),
             trivial_all: Vec::new(),
             lookups: 0,
             _score: std::marker::PhantomData,
@@ -631,18 +627,16 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         scorer
     }
 
-    /// Fills `looked_up` and `trivial_rest` from the layers' fractions of informative blocks
+    /// Fills `looked_up` and `trivial_all` from the layers' fractions of informative blocks
     /// and the current neutral scores.
     fn choose_looked_up_cells(&mut self) {
         let v = self.voxels;
         let plane = v.rows * v.cols;
         let best_anywhere = self.exact[0];
         self.looked_up.clear();
-        self.trivial_rest.clear();
         self.trivial_all.clear();
         for fractions in &v.nonzero_fraction {
             let mut cells = Vec::new();
-            let mut rest = 0.0;
             let mut all = 0.0;
             for (i, layer) in self.cells.layer_offset.iter().enumerate() {
                 let informative =
@@ -650,8 +644,6 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 all += best_anywhere.max(self.neutral[i]);
                 if informative {
                     cells.push(i);
-                } else {
-                    rest += best_anywhere.max(self.neutral[i]);
                 }
             }
             // Most informative layers first, so that a box that cannot beat the best pose is
@@ -661,15 +653,8 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             let spread = |i: usize| (i as u64).wrapping_mul(2_654_435_761) % (1 << 32);
             cells.sort_by(|&a, &b| fraction(b).total_cmp(&fraction(a)).then(spread(a).cmp(&spread(b))));
             self.looked_up.push(cells);
-            self.trivial_rest.push(rest);
             self.trivial_all.push(all);
         }
-    }
-
-    /// Distance-transform lookups made so far, in units of whole local maps (one per pose
-    /// scored): the search's work in pose evaluations.
-    pub fn pose_equivalents(&self) -> u64 {
-        self.lookups.div_ceil(self.cells.len().max(1) as u64)
     }
 
     /// The pose lattice.
@@ -949,9 +934,10 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
     /// The translation part of every box is a pyramid block (2^a x 2^a or 2^a x 2^(a+1)
     /// lattice steps, clipped to the window), so that [`BoundKind::MinPool`] bounds it with
     /// one lookup per local cell; boxes are taken best bound first, and split in two along
-    /// heading or along the block's longer side as the [`SplitRule`] says. Every box bounded
-    /// and every pose scored counts as one evaluation: each costs one pass over the local
-    /// cells.
+    /// heading or along the block's longer side as the [`SplitRule`] says. The work is counted
+    /// in distance-transform lookups divided by the number of local cells (a pose scored costs
+    /// one; a box bound costs the lookups it made before it was decided), and the boxes bounded
+    /// are counted separately.
     pub fn branch_and_bound(
         &mut self,
         threshold: f64,

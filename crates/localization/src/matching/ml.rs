@@ -141,7 +141,8 @@ impl DistanceScore for MixtureLikelihood {
     }
 }
 
-/// Min-filter levels kept for a bound kind (half-sides 1 to 16 cells).
+/// Pyramid levels of the distance transform kept for a bound kind (blocks of 1 x 2 up to 64 x 64
+/// cells).
 pub(crate) fn pool_levels(bound: BoundKind) -> usize {
     match bound {
         BoundKind::MinPool => 12,
