@@ -3,6 +3,8 @@
 //! serialized bus gives the same run as the in-process one; JAUS states follow the commands; an
 //! emergency stop reaches every component and stops all motion.
 
+mod common;
+
 use rovernav_bus::Bus;
 use rovernav_core::{NavCommand, NavInput, Outcome, Point2, Pose3};
 use rovernav_executive::components::JausState;
@@ -19,24 +21,7 @@ use rovernav_sim::Simulator;
 
 /// A 12 m yard, quick in a debug build.
 fn small_mission(seed: u64) -> Mission {
-    let text = format!(
-        r#"
-name = "small-yard"
-seed = {seed}
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-[goal]
-x = 9.5
-y = 8.5
-"#
-    );
+    let text = common::small_yard("small-yard", seed, common::SMALL_YARD_GOAL);
     Mission::from_toml(&text, "small-yard").expect("valid mission")
 }
 

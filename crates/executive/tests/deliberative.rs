@@ -1,6 +1,8 @@
 //! The deliberative layer in closed loop: the plan's tasks in sequence and in parallel, each
 //! command's state, and operator commands changing the mission while it runs.
 
+mod common;
+
 use rovernav_core::{NavCommand, Point2, Pose3};
 use rovernav_executive::{
     CycleRecord, Mission, NoObserver, Report, RunObserver, RunOptions, RunOutput, RunSettings,
@@ -9,22 +11,7 @@ use rovernav_executive::{
 
 /// A 12 m yard; `extra` is appended to the mission text.
 fn mission(extra: &str) -> Mission {
-    let text = format!(
-        r#"
-name = "task-yard"
-seed = 3
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-{extra}
-"#
-    );
+    let text = common::small_yard("task-yard", 3, &format!("{extra}\n"));
     Mission::from_toml(&text, "task-yard").expect("valid mission")
 }
 

@@ -2,6 +2,8 @@
 //! compass that reads NaN each stop the rover with `help_requested`, the component that serves
 //! the sensor in Failure, a message naming the fault, and every executed command in the log.
 
+mod common;
+
 use rovernav_core::{NavCommand, SensorFrame};
 use rovernav_executive::{
     CycleRecord, Mission, Report, RunObserver, RunOptions, RunSettings, Trace, World, build_world,
@@ -12,26 +14,8 @@ use rovernav_terrain::procedural::{add_craters, yard_craters};
 
 /// A 12 m yard with one `[[faults]]` entry.
 fn mission_with_fault(fault: &str) -> Mission {
-    let text = format!(
-        r#"
-name = "fault-yard"
-seed = 3
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-[goal]
-x = 9.5
-y = 8.5
-[[faults]]
-{fault}
-"#
-    );
+    let text =
+        common::small_yard("fault-yard", 3, &format!("{}[[faults]]\n{fault}\n", common::SMALL_YARD_GOAL));
     Mission::from_toml(&text, "fault-yard").expect("valid mission")
 }
 

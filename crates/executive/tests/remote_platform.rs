@@ -2,6 +2,8 @@
 //! single-process run exactly, faults and operator commands included, with truth computed only
 //! by the server.
 
+mod common;
+
 use rovernav_executive::remote::{LocalLink, PlatformServer, run_remote};
 use rovernav_executive::{
     Mission, NoObserver, Report, RunOptions, RunOutput, RunSettings, ScriptedOperator, build_world,
@@ -10,25 +12,7 @@ use rovernav_executive::{
 
 /// A 12 m yard, quick in a debug build, with optional extra TOML (faults).
 fn mission(seed: u64, extra: &str) -> Mission {
-    let text = format!(
-        r#"
-name = "remote-yard"
-seed = {seed}
-[terrain]
-kind = "procedural"
-size_m = 12.0
-resolution_m = 0.05
-rock_abundance = 0.12
-[start]
-x = 2.0
-y = 2.0
-yaw_deg = 10.0
-[goal]
-x = 9.5
-y = 8.5
-{extra}
-"#
-    );
+    let text = common::small_yard("remote-yard", seed, &format!("{}{extra}\n", common::SMALL_YARD_GOAL));
     Mission::from_toml(&text, "remote-yard").expect("valid mission")
 }
 
