@@ -70,6 +70,13 @@ pub enum SenseRequest {
         /// Pan angle, counter-clockwise from forward (rad).
         pan: f64,
     },
+    /// Point the mast stereo pair at a body-frame pan angle (rad) and image one wedge at the
+    /// cameras' full resolution: the terrain-matching image, denser and slower than the
+    /// navigation image [`SenseRequest::Mast`] takes.
+    MastFine {
+        /// Pan angle, counter-clockwise from forward (rad).
+        pan: f64,
+    },
     /// Image with the forward body stereo pair.
     BodyFront,
     /// Image with the rear body stereo pair.

@@ -299,6 +299,11 @@ pub enum SenseMsg {
         /// Pan (rad).
         pan: f64,
     },
+    /// Full-resolution mast stereo at a body-frame pan (rad).
+    MastFine {
+        /// Pan (rad).
+        pan: f64,
+    },
     /// Forward body stereo.
     BodyFront,
     /// Rear body stereo.
@@ -352,6 +357,7 @@ impl From<&NavCommand> for CommandMsg {
                     .iter()
                     .map(|r| match *r {
                         SenseRequest::Mast { pan } => SenseMsg::Mast { pan },
+                        SenseRequest::MastFine { pan } => SenseMsg::MastFine { pan },
                         SenseRequest::BodyFront => SenseMsg::BodyFront,
                         SenseRequest::BodyRear => SenseMsg::BodyRear,
                         SenseRequest::Lidar { pan } => SenseMsg::Lidar { pan },
@@ -381,6 +387,7 @@ impl CommandMsg {
                     .iter()
                     .map(|r| match *r {
                         SenseMsg::Mast { pan } => SenseRequest::Mast { pan },
+                        SenseMsg::MastFine { pan } => SenseRequest::MastFine { pan },
                         SenseMsg::BodyFront => SenseRequest::BodyFront,
                         SenseMsg::BodyRear => SenseRequest::BodyRear,
                         SenseMsg::Lidar { pan } => SenseRequest::Lidar { pan },

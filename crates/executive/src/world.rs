@@ -85,6 +85,7 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
     }
     if let Some(p) = mission.sensors.stereo_dropout {
         sensor_model.mast.dropout = p;
+        sensor_model.mast_fine.dropout = p;
         sensor_model.body.dropout = p;
     }
     let invalid = |field: &str, message: String| WorldError::Invalid {

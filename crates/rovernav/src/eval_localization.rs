@@ -44,6 +44,9 @@ pub struct EvalLocalizationArgs {
     /// Branch-and-bound cases.
     #[arg(long, default_value_t = 100)]
     bnb_cases: u64,
+    /// Yards of the stereo sequence protocol (12 views 1 m apart in each).
+    #[arg(long, default_value_t = 10)]
+    sequence_yards: u64,
     /// Worker threads.
     #[arg(long, default_value_t = 2)]
     threads: usize,
@@ -164,7 +167,8 @@ pub fn closed_loop_seed(
     Ok((ml, dr))
 }
 
-/// The simulator's mast stereo from a true pose: a small yard, one forward mast wedge.
+/// The simulator's mast stereo from a true pose: a small yard, one forward mast wedge imaged at
+/// full resolution (the terrain-matching image) with the default stereo noise.
 fn sim_sequence(seed: u64) -> anyhow::Result<rovernav_localization::evaluation::SequenceReport> {
     let params = MarsYardParams {
         width_m: 30.0,
@@ -186,7 +190,7 @@ fn sim_sequence(seed: u64) -> anyhow::Result<rovernav_localization::evaluation::
         .collect();
     let sense = |pose: &Pose3, s: u64| {
         let mut sim = Simulator::new(terrain.clone(), rover.clone(), model.clone(), pose.pose2(), s);
-        let frame = sim.execute(&NavCommand::Sense(vec![SenseRequest::Mast { pan: 0.0 }]));
+        let frame = sim.execute(&NavCommand::Sense(vec![SenseRequest::MastFine { pan: 0.0 }]));
         frame.clouds.into_iter().flat_map(|c| c.points).collect::<Vec<_>>()
     };
     Ok(sequence_accuracy(sense, &truth, &SequenceSetup::default(), seed, 2)?)
@@ -202,7 +206,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
     let mut downrange = 0.0;
     let mut crossrange = 0.0;
     let mut within = 0.0;
-    let sequences = 3u64;
+    let sequences = args.sequence_yards;
     for seed in 1..=sequences {
         let r = sim_sequence(seed)?;
         downrange += r.mean_abs_downrange / sequences as f64;
@@ -265,6 +269,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
         "mean_abs_err_downrange_m": downrange,
         "mean_abs_err_crossrange_m": crossrange,
         "sequence_within_three_sigma": within,
+        "sequence_yards": sequences,
         "closed_loop_seeds": results.len(),
         "closed_loop_reached": reached,
         "closed_loop_mean_distance_m": distance,

@@ -97,6 +97,8 @@ pub struct ProximityModel {
 pub struct SensorModel {
     /// Mast stereo pair grid and noise (geometry from `RoverConfig`).
     pub mast: RangeImagerModel,
+    /// Mast stereo pair at full resolution (`SenseRequest::MastFine`, for terrain matching).
+    pub mast_fine: RangeImagerModel,
     /// Body stereo pairs grid and noise (geometry from `RoverConfig`).
     pub body: RangeImagerModel,
     /// Nodding LIDAR.
@@ -146,6 +148,19 @@ impl Default for SensorModel {
                 dropout: 0.05,
                 // Pointing the mast, imaging and stereo on a 1990s flight-class CPU (assumed).
                 capture_time: 10.0,
+            },
+            // The same cameras' finer image for terrain matching: 4x the rays in each direction
+            // (the navigation image is a subsample), the same range noise per metre (so the
+            // localisation evaluation keeps the default stereo noise), twice the capture time.
+            mast_fine: RangeImagerModel {
+                cols: 240,
+                rows: 160,
+                near_range: 1.0,
+                up_margin: deg(5.0),
+                sigma_constant: 0.0,
+                sigma_quadratic: 0.004,
+                dropout: 0.05,
+                capture_time: 20.0,
             },
             // Paper 000 section 2.2: body pairs see roughly 0-1.5 m from the vehicle.
             body: RangeImagerModel {
@@ -261,6 +276,18 @@ impl RangeGeometry {
             rover.mast_fov,
             rover.mast_range,
             &model.mast,
+        )
+    }
+
+    /// The mast pair panned to `pan`, imaging at full resolution.
+    pub fn mast_fine(rover: &RoverConfig, model: &SensorModel, pan: f64) -> Self {
+        Self::pointed(
+            CameraKind::Mast,
+            [0.0, 0.0, rover.mast_height],
+            pan,
+            rover.mast_fov,
+            rover.mast_range,
+            &model.mast_fine,
         )
     }
 

@@ -283,6 +283,9 @@ impl Simulator {
             SenseRequest::Mast { pan } => {
                 (RangeGeometry::mast(&self.rover, &self.model, pan), &self.model.mast)
             }
+            SenseRequest::MastFine { pan } => {
+                (RangeGeometry::mast_fine(&self.rover, &self.model, pan), &self.model.mast_fine)
+            }
             SenseRequest::BodyFront => {
                 (RangeGeometry::body(&self.rover, &self.model, true), &self.model.body)
             }

@@ -37,7 +37,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rovernav_core::{Grid2, Pose2, wrap_angle};
 
 use super::distance_transform::{squared_distance_3d, squared_distances};
@@ -1058,44 +1058,63 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
     /// `radius` steps of `best` (a normal surface in log space); returns the subpixel offset
     /// (lattice units) and the covariance (lattice units) of the normal whose log is the fitted
     /// surface divided by `temperature`, or `None` without a maximum.
+    ///
+    /// Axes the window does not search (half-width 0, e.g. a heading known from other sensors,
+    /// as paper 002 section 3 assumes) are neither fitted nor moved: their offset and variance
+    /// are 0, so the estimate stays on the given value.
     pub fn fit_peak(
         &mut self,
         best: [i32; 3],
         radius: i32,
         temperature: f64,
     ) -> Option<([f64; 3], Matrix3<f64>)> {
-        let mut ata = SMatrix::<f64, 10, 10>::zeros();
-        let mut atb = SVector::<f64, 10>::zeros();
+        let active: Vec<usize> = (0..3).filter(|&a| self.lattice.half[a] > 0).collect();
+        let n = active.len();
+        if n == 0 {
+            return Some(([0.0; 3], Matrix3::zeros()));
+        }
+        // Features: 1, the active coordinates, their squares and their pairwise products.
+        let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
+        let m = 1 + 2 * n + pairs.len();
+        let mut ata = DMatrix::<f64>::zeros(m, m);
+        let mut atb = DVector::<f64>::zeros(m);
         let center = self.score_pose(best);
-        for dk in -radius..=radius {
-            for dj in -radius..=radius {
-                for di in -radius..=radius {
+        let span = |a: usize| if self.lattice.half[a] > 0 { radius } else { 0 };
+        let (s0, s1, s2) = (span(0), span(1), span(2));
+        for dk in -s2..=s2 {
+            for dj in -s1..=s1 {
+                for di in -s0..=s0 {
                     let s = if (di, dj, dk) == (0, 0, 0) {
                         center
                     } else {
                         self.score_pose([best[0] + di, best[1] + dj, best[2] + dk])
                     } - center;
-                    let (a, b, c) = (f64::from(di), f64::from(dj), f64::from(dk));
-                    let f =
-                        SVector::<f64, 10>::from([1.0, a, b, c, a * a, b * b, c * c, a * b, a * c, b * c]);
-                    ata += f * f.transpose();
-                    atb += f * s;
+                    let d = [f64::from(di), f64::from(dj), f64::from(dk)];
+                    let u: Vec<f64> = active.iter().map(|&a| d[a]).collect();
+                    let mut f = DVector::<f64>::zeros(m);
+                    f[0] = 1.0;
+                    for i in 0..n {
+                        f[1 + i] = u[i];
+                        f[1 + n + i] = u[i] * u[i];
+                    }
+                    for (k, &(i, j)) in pairs.iter().enumerate() {
+                        f[1 + 2 * n + k] = u[i] * u[j];
+                    }
+                    ata += &f * f.transpose();
+                    atb += &f * s;
                 }
             }
         }
         let beta = ata.lu().solve(&atb)?;
-        let g = Vector3::new(beta[1], beta[2], beta[3]);
-        let h = Matrix3::new(
-            2.0 * beta[4],
-            beta[7],
-            beta[8],
-            beta[7],
-            2.0 * beta[5],
-            beta[9],
-            beta[8],
-            beta[9],
-            2.0 * beta[6],
-        );
+        let g = DVector::from_iterator(n, (0..n).map(|i| beta[1 + i]));
+        let mut h = DMatrix::<f64>::zeros(n, n);
+        for i in 0..n {
+            h[(i, i)] = 2.0 * beta[1 + n + i];
+        }
+        for (k, &(i, j)) in pairs.iter().enumerate() {
+            h[(i, j)] = beta[1 + 2 * n + k];
+            h[(j, i)] = beta[1 + 2 * n + k];
+        }
         // A proper maximum has a positive-definite negative Hessian. A ridge (a direction
         // the map does not constrain) gives a tiny or negative curvature along it: floor the
         // eigenvalues so that direction gets a large variance instead of breaking the fit.
@@ -1107,13 +1126,18 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         // Curvature floor: no direction gets a variance beyond the search window's size.
         let window = f64::from(self.lattice.half.iter().copied().max().unwrap_or(1).max(1));
         let floor = (temperature / (window * window)).min(largest);
-        let clamped = eigen.eigenvalues.map(|e| e.max(floor));
-        let inv = eigen.eigenvectors
-            * Matrix3::from_diagonal(&clamped.map(|e| 1.0 / e))
-            * eigen.eigenvectors.transpose();
-        let offset = inv * g;
-        let offset = [0, 1, 2].map(|a| offset[a].clamp(-1.0, 1.0));
-        Some((offset, inv * temperature))
+        let clamped = eigen.eigenvalues.map(|e| 1.0 / e.max(floor));
+        let inv = &eigen.eigenvectors * DMatrix::from_diagonal(&clamped) * eigen.eigenvectors.transpose();
+        let step = &inv * g;
+        let mut offset = [0.0; 3];
+        let mut covariance = Matrix3::zeros();
+        for (i, &a) in active.iter().enumerate() {
+            offset[a] = step[i].clamp(-1.0, 1.0);
+            for (j, &b) in active.iter().enumerate() {
+                covariance[(a, b)] = inv[(i, j)] * temperature;
+            }
+        }
+        Some((offset, covariance))
     }
 }
 
@@ -1155,7 +1179,7 @@ pub fn run_match<S: DistanceScore>(
         Some((o, c)) => (o, c, true),
         None => {
             // No proper peak: report the whole window as the uncertainty.
-            let w = [0, 1, 2].map(|a| f64::from(lattice.half[a].max(1)).powi(2));
+            let w = [0, 1, 2].map(|a| f64::from(lattice.half[a]).powi(2));
             ([0.0; 3], Matrix3::from_diagonal(&Vector3::new(w[0], w[1], w[2])), false)
         }
     };
@@ -1164,8 +1188,11 @@ pub fn run_match<S: DistanceScore>(
         for (c, v) in row.iter_mut().enumerate() {
             *v = cov_lattice[(r, c)] * steps[r] * steps[c];
         }
-        // The lattice itself cannot resolve better than a uniform error over one step.
-        row[r] += steps[r] * steps[r] / 12.0;
+        // The lattice itself cannot resolve better than a uniform error over one step (an
+        // axis the window fixes is not estimated at all).
+        if lattice.half[r] > 0 {
+            row[r] += steps[r] * steps[r] / 12.0;
+        }
     }
     // Failure search: the best pose away from the peak.
     let exclusion = [0, 1, 2].map(|a| {

@@ -302,6 +302,9 @@ pub struct SensorFrameMsg {
     pub clouds: Vec<CloudMsg>,
 }
 
+/// The sensor name of a full-resolution mast image request.
+const MAST_FINE: &str = "mast_fine";
+
 const CAMERAS: [CameraKind; 4] =
     [CameraKind::Mast, CameraKind::BodyFront, CameraKind::BodyRear, CameraKind::Lidar];
 
@@ -516,7 +519,7 @@ pub struct CommandMsg {
 /// One sensing request (owned form for deserialisation).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SenseRequestMsg {
-    /// `mast` | `body_front` | `body_rear` | `lidar`.
+    /// `mast` | `mast_fine` | `body_front` | `body_rear` | `lidar`.
     pub sensor: String,
     /// Pan angle for the mast and LIDAR (rad).
     pub pan: Option<f64>,
@@ -545,12 +548,13 @@ impl CommandMsg {
                     .iter()
                     .map(|r| {
                         let (sensor, pan) = match *r {
-                            SenseRequest::Mast { pan } => (CameraKind::Mast, Some(pan)),
-                            SenseRequest::BodyFront => (CameraKind::BodyFront, None),
-                            SenseRequest::BodyRear => (CameraKind::BodyRear, None),
-                            SenseRequest::Lidar { pan } => (CameraKind::Lidar, Some(pan)),
+                            SenseRequest::Mast { pan } => (CameraKind::Mast.as_str(), Some(pan)),
+                            SenseRequest::MastFine { pan } => (MAST_FINE, Some(pan)),
+                            SenseRequest::BodyFront => (CameraKind::BodyFront.as_str(), None),
+                            SenseRequest::BodyRear => (CameraKind::BodyRear.as_str(), None),
+                            SenseRequest::Lidar { pan } => (CameraKind::Lidar.as_str(), Some(pan)),
                         };
-                        SenseRequestMsg { sensor: sensor.as_str().into(), pan }
+                        SenseRequestMsg { sensor: sensor.into(), pan }
                     })
                     .collect();
             }
@@ -586,6 +590,7 @@ impl CommandMsg {
                         let pan = || need(r.pan, &format!("sense[{i}].pan"));
                         Ok(match r.sensor.as_str() {
                             "mast" => SenseRequest::Mast { pan: pan()? },
+                            MAST_FINE => SenseRequest::MastFine { pan: pan()? },
                             "body_front" => SenseRequest::BodyFront,
                             "body_rear" => SenseRequest::BodyRear,
                             "lidar" => SenseRequest::Lidar { pan: pan()? },

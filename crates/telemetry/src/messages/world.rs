@@ -169,6 +169,9 @@ pub struct SlipMsg {
 pub struct SensorModelMsg {
     /// Mast stereo.
     pub mast: ImagerMsg,
+    /// Full-resolution mast stereo (absent in logs written before it existed: the default).
+    #[serde(default)]
+    pub mast_fine: Option<ImagerMsg>,
     /// Body stereo.
     pub body: ImagerMsg,
     /// LIDAR.
@@ -305,6 +308,7 @@ impl WorldMsg {
             },
             sensor_model: SensorModelMsg {
                 mast: imager_msg(&s.mast),
+                mast_fine: Some(imager_msg(&s.mast_fine)),
                 body: imager_msg(&s.body),
                 lidar: LidarMsg {
                     imager: imager_msg(&s.lidar.imager),
@@ -411,6 +415,11 @@ impl WorldMsg {
             },
             sensor_model: SensorModel {
                 mast: imager_model(&s.mast),
+                mast_fine: s
+                    .mast_fine
+                    .as_ref()
+                    .map(imager_model)
+                    .unwrap_or_else(|| SensorModel::default().mast_fine),
                 body: imager_model(&s.body),
                 lidar: LidarModel {
                     imager: imager_model(&s.lidar.imager),
