@@ -132,6 +132,9 @@ pub struct NavInput<'a> {
     pub goal: &'a Goal,
     /// What the platform reported for the previous command.
     pub frame: &'a SensorFrame,
+    /// The body-frame mast pan (rad) whose view the localiser predicts will localise the rover
+    /// best from here ([`Localizer::localization_target`]); `None` if it does not match terrain.
+    pub localization_target: Option<f64>,
 }
 
 /// A drawing primitive a navigator exposes for the traverse picture.
@@ -216,5 +219,11 @@ pub trait Localizer: Send {
     /// Counters for the report.
     fn stats(&self) -> LocalizerStats {
         LocalizerStats::default()
+    }
+    /// The body-frame mast pan (rad) whose view is predicted, from the localiser's own map, to
+    /// localise the rover best from the current estimate (paper 000 section 4.4); `None` for a
+    /// localiser that does not match terrain, or before it has a map there.
+    fn localization_target(&self) -> Option<f64> {
+        None
     }
 }

@@ -127,6 +127,10 @@ pub struct EstimateMsg {
     /// Covariance of (x, y, yaw).
     #[serde(with = "nan_as_null_matrix")]
     pub covariance: [[f64; 3]; 3],
+    /// The localiser's localisation target: the body-frame mast pan (rad) predicted to localise
+    /// best from here (absent when the localiser does not match terrain).
+    #[serde(default)]
+    pub localization_target: Option<f64>,
 }
 
 impl EstimateMsg {

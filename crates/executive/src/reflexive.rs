@@ -68,6 +68,8 @@ pub struct NavigatorComponent {
     frame: Option<SensorFrame>,
     last_frame: SensorFrame,
     estimate: Option<PoseEstimate>,
+    /// The localiser's latest localisation target (mast pan, rad).
+    localization_target: Option<f64>,
     fresh: bool,
     next_id: u64,
     last_plan: Vec<Point2>,
@@ -91,6 +93,7 @@ impl NavigatorComponent {
             frame: None,
             last_frame: SensorFrame::default(),
             estimate: None,
+            localization_target: None,
             fresh: false,
             next_id: 0,
             last_plan: Vec::new(),
@@ -154,6 +157,7 @@ impl NavigatorComponent {
         }
         if let Some(e) = take_all(bus, &self.estimates)?.pop() {
             self.estimate = Some(e.estimate());
+            self.localization_target = e.localization_target;
             self.fresh = true;
         }
         Ok(())
@@ -207,7 +211,13 @@ impl Component for NavigatorComponent {
         if let Some(f) = self.frame.take() {
             self.last_frame = f;
         }
-        let input = NavInput { time: self.last_frame.t, estimate, goal: &goal, frame: &self.last_frame };
+        let input = NavInput {
+            time: self.last_frame.t,
+            estimate,
+            goal: &goal,
+            frame: &self.last_frame,
+            localization_target: self.localization_target,
+        };
         let command = self.navigator.step(&input);
         self.fresh = false;
         let plan = self.navigator.planned_path();
@@ -310,7 +320,13 @@ impl PoseEstimatorComponent {
 
     fn publish(&mut self, bus: &mut Bus, frame_seq: u64, t: f64) -> Result<(), ComponentFault> {
         let e = self.localizer.estimate();
-        self.last = EstimateMsg { frame_seq, t, pose: e.pose.into(), covariance: e.covariance };
+        self.last = EstimateMsg {
+            frame_seq,
+            t,
+            pose: e.pose.into(),
+            covariance: e.covariance,
+            localization_target: self.localizer.localization_target(),
+        };
         bus.publish(topics::LOCALIZATION_ESTIMATE, self.last)?;
         let p = e.pose;
         if ![p.x, p.y, p.z, p.roll, p.pitch, p.yaw].iter().all(|v| v.is_finite()) {

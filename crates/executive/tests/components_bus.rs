@@ -68,8 +68,13 @@ fn direct_loop(world: &World, s: &RunSettings) -> Reference {
         if cycles >= s.max_cycles {
             break (Outcome::Timeout, format!("cycle limit of {} reached", s.max_cycles));
         }
-        let input =
-            NavInput { time: sim.time(), estimate: localizer.estimate(), goal: &world.goal, frame: &frame };
+        let input = NavInput {
+            time: sim.time(),
+            estimate: localizer.estimate(),
+            goal: &world.goal,
+            frame: &frame,
+            localization_target: localizer.localization_target(),
+        };
         let command = navigator.step(&input);
         if let NavCommand::Finish(outcome, message) = command {
             break (outcome, message);

@@ -30,6 +30,7 @@ use rovernav_core::{
 use crate::ekf::{Ekf, EkfParams};
 use crate::matching::elevation::bin_points;
 use crate::matching::{MatchResult, MlMatcher, MlParams, SearchWindow};
+use crate::target::{TargetParams, rank_pans};
 
 /// Parameters of the map-matching localiser.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,6 +66,10 @@ pub struct EkfMlParams {
     pub max_fix_sigma: f64,
     /// Fewest local-map cells worth matching.
     pub min_local_cells: usize,
+    /// Localisation targets (paper 000 section 4.4) are chosen among the pans `PI` and
+    /// `PI +- target_spread` (rad): views back over the terrain just crossed, which the map
+    /// holds from nearer and so denser views than terrain ahead.
+    pub target_spread: f64,
     /// Matcher parameters.
     pub matcher: MlParams,
 }
@@ -86,6 +91,7 @@ impl Default for EkfMlParams {
             max_failure_probability: 0.5,
             max_fix_sigma: 0.3,
             min_local_cells: 300,
+            target_spread: std::f64::consts::FRAC_PI_4,
             matcher: MlParams {
                 max_local_cells: Some(2000),
                 vertical_exaggeration: 3.0,
@@ -237,6 +243,10 @@ pub struct EkfMl {
     travel_since_fix: f64,
     /// Estimated position after the previous update.
     previous_position: Point2,
+    /// How localisation targets are predicted.
+    target_params: TargetParams,
+    /// The latest localisation target: where it was chosen (estimate) and the pan.
+    target: Option<(Point2, f64)>,
 }
 
 impl EkfMl {
@@ -261,6 +271,17 @@ impl EkfMl {
             last_match: None,
             travel_since_fix: 0.0,
             previous_position: Point2::new(initial.x, initial.y),
+            target_params: TargetParams {
+                fov: config.mast_fov,
+                mast_height: config.mast_height,
+                max_range: config.mast_range,
+                // The mast stereo's range error, 0.004 r^2 (sim::SensorModel's default).
+                height_noise_at_1m: 0.004,
+                // A prediction only ranks a few views: a fifth of the fix's cells is enough.
+                params: MlParams { max_local_cells: Some(400), ..params.matcher },
+                ..Default::default()
+            },
+            target: None,
         }
     }
 
@@ -368,6 +389,27 @@ impl EkfMl {
         self.stats.fixes_used += 1;
     }
 
+    /// Chooses the localisation target for the next match when one is due (the rover has moved
+    /// far enough since the last match and the target was chosen elsewhere): the candidate pan
+    /// whose view, predicted from the map, gives the smallest predicted position uncertainty.
+    fn choose_target(&mut self) {
+        let estimate = self.ekf.estimate();
+        let here = estimate.pose.pose2();
+        let due = self.last_match_position.is_some_and(|p| p.dist(here.position()) >= self.params.min_travel);
+        let fresh = self.target.is_some_and(|(p, _)| p.dist(here.position()) < 0.25);
+        if !due || fresh || self.map.is_empty() {
+            return;
+        }
+        let spread = self.params.target_spread;
+        let pans = [std::f64::consts::PI, std::f64::consts::PI - spread, std::f64::consts::PI + spread];
+        let half = self.target_params.max_range + self.target_params.window_xy + 1.0;
+        let global = self.map.crop(here.position(), half, self.params.resolution);
+        let best = rank_pans(&global, &here, &pans, &self.target_params)
+            .ok()
+            .and_then(|ranked| ranked.first().filter(|c| c.cost.is_finite()).map(|c| c.pan));
+        self.target = best.map(|pan| (here.position(), rovernav_core::wrap_angle(pan)));
+    }
+
     /// Places clouds in the world map with the current estimate.
     fn map_clouds(&mut self, clouds: &[PointCloud]) {
         let estimate = self.ekf.estimate();
@@ -388,8 +430,13 @@ impl Localizer for EkfMl {
         "ekf-ml"
     }
 
+    fn localization_target(&self) -> Option<f64> {
+        self.target.map(|(_, pan)| pan)
+    }
+
     fn reset(&mut self, pose: Pose3) {
         self.ekf.reset(pose);
+        self.target = None;
         // The map was placed with the old estimate: start a new one.
         self.map = WorldElevation::default();
         self.last_match_position = None;
@@ -408,6 +455,7 @@ impl Localizer for EkfMl {
         self.previous_position = here;
         let clouds: Vec<PointCloud> = frame.clouds.iter().filter(|c| !c.points.is_empty()).cloned().collect();
         if clouds.is_empty() {
+            self.choose_target();
             return;
         }
         let estimate = self.ekf.estimate();

@@ -65,7 +65,8 @@ pub struct TargetCandidate {
     pub position_sigma: f64,
     /// Predicted failure probability.
     pub failure_probability: f64,
-    /// Combined cost (lower is better): position sigma inflated by the failure risk.
+    /// Combined cost (lower is better): the expected position error (m), the predicted sigma if
+    /// the match holds and the search window's half-diagonal if it fails.
     pub cost: f64,
 }
 
@@ -126,6 +127,20 @@ pub fn rank_targets(
     next_pose: &Pose2,
     params: &TargetParams,
 ) -> Result<Vec<TargetCandidate>, MatchError> {
+    let count = params.candidates.max(1);
+    let pans: Vec<f64> =
+        (0..count).map(|i| wrap_angle(i as f64 * std::f64::consts::TAU / count as f64)).collect();
+    rank_pans(global, next_pose, &pans, params)
+}
+
+/// Ranks the given pan angles (body frame, rad) for localising at `next_pose` against
+/// `global` (best first).
+pub fn rank_pans(
+    global: &Grid2<f32>,
+    next_pose: &Pose2,
+    pans: &[f64],
+    params: &TargetParams,
+) -> Result<Vec<TargetCandidate>, MatchError> {
     let matcher = MlMatcher::new(global, params.params)?;
     let window = SearchWindow {
         center: *next_pose,
@@ -133,10 +148,8 @@ pub fn rank_targets(
         half_y: params.window_xy,
         half_yaw: params.window_yaw,
     };
-    let count = params.candidates.max(1);
-    let mut out = Vec::with_capacity(count);
-    for i in 0..count {
-        let pan = wrap_angle(i as f64 * std::f64::consts::TAU / count as f64);
+    let mut out = Vec::with_capacity(pans.len());
+    for (i, &pan) in pans.iter().enumerate() {
         let view = predicted_view(global, next_pose, pan, params, i as u64);
         let cells = view.data.iter().filter(|h| h.is_finite()).count();
         let candidate = match matcher.match_detailed(&view, &window, false) {
@@ -149,7 +162,10 @@ pub fn rank_targets(
                     cells,
                     position_sigma: sigma,
                     failure_probability: p,
-                    cost: sigma / (1.0 - p).max(1e-6),
+                    // A failed match lands anywhere in the window: an error of the order of
+                    // its half-diagonal. (Dividing the sigma by 1 - p instead let a featureless
+                    // view with a one-in-four failure risk beat a rocky one.)
+                    cost: (1.0 - p) * sigma + p * params.window_xy * std::f64::consts::SQRT_2,
                 }
             }
             Err(MatchError::EmptyMap { .. }) => TargetCandidate {
@@ -223,6 +239,26 @@ mod tests {
             .find(|c| wrap_angle(c.pan + std::f64::consts::FRAC_PI_2).abs() < 0.1)
             .expect("south candidate");
         assert!(south.cost > best.cost);
+    }
+
+    #[test]
+    fn among_rearward_pans_picks_the_one_facing_the_rocks() {
+        // A rover facing +y with rocks at world bearing -3pi/4: behind it and to its left, body
+        // pan 3pi/4 = pi - pi/4.
+        let rover = Pose2::new(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let rocks = -3.0 * std::f64::consts::FRAC_PI_4;
+        let global = terrain_with_rocky_sector(rocks);
+        let pi = std::f64::consts::PI;
+        let pans = [pi, pi - std::f64::consts::FRAC_PI_4, pi + std::f64::consts::FRAC_PI_4];
+        let ranked = rank_pans(&global, &rover, &pans, &TargetParams::default()).expect("ranking");
+        assert_eq!(ranked.len(), 3);
+        let facing = wrap_angle(rocks - rover.yaw);
+        assert!(
+            wrap_angle(ranked[0].pan - facing).abs() < 1e-9,
+            "picked {:?}, rocks at pan {facing}",
+            ranked[0]
+        );
+        assert!(ranked[1].cost >= ranked[0].cost && ranked[2].cost >= ranked[1].cost);
     }
 
     #[test]

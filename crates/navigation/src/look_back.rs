@@ -4,9 +4,11 @@
 //!
 //! Wraps any navigator. Once the pose estimate has moved at least
 //! [`LookBackConfig::min_travel`] metres since the last look back, the next time the wrapped
-//! navigator asks to sense, the decorator first issues one mast wedge panned backwards at the
-//! cameras' full resolution (`SenseRequest::MastFine { pan: PI }`) and holds the navigator's
-//! command until that image is in.
+//! navigator asks to sense, the decorator first issues one mast wedge at the cameras' full
+//! resolution (`SenseRequest::MastFine`) and holds the navigator's command until that image is
+//! in. The wedge points at the localiser's localisation target when it offers one
+//! (`NavInput::localization_target`, paper 000 section 4.4: `ekf-ml` predicts from its map which
+//! view back over the crossed terrain localises best), else straight back.
 //! The wrapped navigator never sees the look-back frame (its requests and their replies stay
 //! paired); the localiser sees every frame, matches the backward view against its map, and
 //! fuses or rejects the fix itself. Looking back costs one mast image per segment, which the
@@ -93,7 +95,8 @@ impl Navigator for LookBack {
             self.travel = 0.0;
             self.looks += 1;
             self.held = Some(command);
-            return NavCommand::Sense(vec![SenseRequest::MastFine { pan: self.config.pan }]);
+            let pan = input.localization_target.unwrap_or(self.config.pan);
+            return NavCommand::Sense(vec![SenseRequest::MastFine { pan }]);
         }
         command
     }
@@ -142,6 +145,38 @@ mod tests {
     }
 
     #[test]
+    fn the_look_back_points_at_the_localisation_target_when_one_is_offered() {
+        let mut nav = LookBack::new(
+            Box::new(Script { steps: 0, seen_clouds: Vec::new() }),
+            LookBackConfig { min_travel: 0.5, ..Default::default() },
+        );
+        let goal =
+            Goal { position: Point2::new(50.0, 0.0), tolerance: 0.5, waypoints: vec![], keep_out: vec![] };
+        let frame = SensorFrame::default();
+        let mut x = 0.0;
+        let mut looks = Vec::new();
+        for _ in 0..8 {
+            let estimate = PoseEstimate { pose: Pose3 { x, ..Default::default() }, ..Default::default() };
+            let target = if x > 1.0 { Some(2.4) } else { None };
+            let input =
+                NavInput { time: 0.0, estimate, goal: &goal, frame: &frame, localization_target: target };
+            match nav.step(&input) {
+                NavCommand::Drive { distance, .. } => x += distance,
+                NavCommand::Sense(r) => {
+                    if let [SenseRequest::MastFine { pan }] = r[..] {
+                        looks.push((x, pan));
+                    }
+                }
+                _ => {}
+            }
+        }
+        // Without a target the look is straight back; with one, at the target.
+        assert!(looks.iter().any(|&(x, pan)| x <= 1.0 && pan == PI), "{looks:?}");
+        assert!(looks.iter().any(|&(x, pan)| x > 1.0 && pan == 2.4), "{looks:?}");
+        assert!(looks.iter().all(|&(x, pan)| pan == if x > 1.0 { 2.4 } else { PI }), "{looks:?}");
+    }
+
+    #[test]
     fn looks_back_before_the_first_forward_look_after_each_segment() {
         let mut nav =
             LookBack::new(Box::new(Script { steps: 0, seen_clouds: Vec::new() }), Default::default());
@@ -156,7 +191,8 @@ mod tests {
         let mut commands = Vec::new();
         for _ in 0..12 {
             let estimate = PoseEstimate { pose: Pose3 { x, ..Default::default() }, ..Default::default() };
-            let input = NavInput { time: 0.0, estimate, goal: &goal, frame: &frame };
+            let input =
+                NavInput { time: 0.0, estimate, goal: &goal, frame: &frame, localization_target: None };
             let command = nav.step(&input);
             if let NavCommand::Drive { distance, .. } = command {
                 x += distance;

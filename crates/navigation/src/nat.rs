@@ -339,6 +339,7 @@ mod tests {
             estimate: PoseEstimate { pose: Pose3::default(), covariance: [[0.0; 3]; 3] },
             goal: &goal,
             frame: &frame,
+            localization_target: None,
         };
         // The first step builds the map and asks for range data.
         assert!(matches!(nat.step(&input), NavCommand::Sense(_)));

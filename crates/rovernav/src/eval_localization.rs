@@ -113,8 +113,13 @@ pub fn drive<L: Localizer>(
     localizer.update(&frame);
     let mut reached = false;
     for _ in 0..20_000 {
-        let input =
-            NavInput { time: sim.time(), estimate: localizer.estimate(), goal: &world.goal, frame: &frame };
+        let input = NavInput {
+            time: sim.time(),
+            estimate: localizer.estimate(),
+            goal: &world.goal,
+            frame: &frame,
+            localization_target: localizer.localization_target(),
+        };
         let command = nav.step(&input);
         if let NavCommand::Finish(outcome, _) = &command {
             reached = matches!(outcome, rovernav_core::Outcome::Reached);
