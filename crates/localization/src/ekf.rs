@@ -25,6 +25,9 @@ use rovernav_core::{
 
 use crate::matching::MatchResult;
 
+/// Measurement variance standing for "not measured" (rad^2): it leaves the state as it was.
+const UNMEASURED_VARIANCE: f64 = 1e12;
+
 /// Noise and behaviour parameters of the pose estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EkfParams {
@@ -236,11 +239,20 @@ impl Ekf {
             return false;
         }
         let h = Matrix3x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0);
-        let innovation = Vector3::new(
+        let mut innovation = Vector3::new(
             fix.pose.x - self.state[0],
             fix.pose.y - self.state[1],
             angle_diff(fix.pose.yaw, self.state[2]),
         );
+        // A heading variance of 0 means the match held the heading fixed (a window of no
+        // heading width) rather than measured it: fuse the position only.
+        let mut r = r;
+        if fix.covariance[2][2] <= 0.0 {
+            r.fill_row(2, 0.0);
+            r.fill_column(2, 0.0);
+            r[(2, 2)] = UNMEASURED_VARIANCE;
+            innovation[2] = 0.0;
+        }
         if !self.kalman_update(&h, &innovation, &r) {
             self.stats.fixes_rejected += 1;
             return false;
@@ -677,6 +689,27 @@ mod tests {
         let bad = MatchResult { failure_probability: 0.9, ..fix };
         assert!(!ekf.fuse_fix(&bad));
         assert_eq!(ekf.stats().fixes_rejected, 1);
+    }
+
+    #[test]
+    fn a_fix_with_its_heading_held_fixed_updates_the_position_only() {
+        let config = RoverConfig::default();
+        let mut ekf = Ekf::new(&config, Pose3::default());
+        let p = ekf.full_covariance();
+        let r = 0.02f64.powi(2);
+        let fix = MatchResult {
+            pose: rovernav_core::Pose2::new(0.1, 0.0, 0.3),
+            covariance: [[r, 0.0, 0.0], [0.0, r, 0.0], [0.0, 0.0, 0.0]],
+            log_likelihood: 0.0,
+            failure_probability: 0.0,
+            poses_evaluated: 1,
+        };
+        assert!(ekf.fuse_fix(&fix));
+        let e = ekf.estimate();
+        assert!((e.pose.x - p[0][0] / (p[0][0] + r) * 0.1).abs() < 1e-9);
+        // The heading and its variance are as before: a held heading is no measurement.
+        assert!(e.pose.yaw.abs() < 1e-9, "yaw {}", e.pose.yaw);
+        assert!((e.covariance[2][2] - p[2][2]).abs() < 1e-9 * p[2][2].max(1e-12));
     }
 
     #[test]

@@ -23,8 +23,8 @@
 use std::collections::HashMap;
 
 use rovernav_core::{
-    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose3, PoseEstimate, RoverConfig,
-    SensorFrame,
+    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose2, Pose3, PoseEstimate,
+    RoverConfig, SensorFrame,
 };
 
 use crate::ekf::{Ekf, EkfParams};
@@ -245,8 +245,8 @@ pub struct EkfMl {
     previous_position: Point2,
     /// How localisation targets are predicted.
     target_params: TargetParams,
-    /// The latest localisation target: where it was chosen (estimate) and the pan.
-    target: Option<(Point2, f64)>,
+    /// The latest localisation target: the estimated pose it was chosen at and the pan.
+    target: Option<(Pose2, f64)>,
 }
 
 impl EkfMl {
@@ -275,7 +275,8 @@ impl EkfMl {
                 fov: config.mast_fov,
                 mast_height: config.mast_height,
                 max_range: config.mast_range,
-                // The mast stereo's range error, 0.004 r^2 (sim::SensorModel's default).
+                // The mast stereo's range error model, 0.004 r^2 (the simulator's default mast;
+                // a real rover would use its cameras' calibrated figure).
                 height_noise_at_1m: 0.004,
                 // A prediction only ranks a few views: a fifth of the fix's cells is enough.
                 params: MlParams { max_local_cells: Some(400), ..params.matcher },
@@ -390,13 +391,18 @@ impl EkfMl {
     }
 
     /// Chooses the localisation target for the next match when one is due (the rover has moved
-    /// far enough since the last match and the target was chosen elsewhere): the candidate pan
-    /// whose view, predicted from the map, gives the smallest predicted position uncertainty.
+    /// far enough since the last match, and the target was chosen at another pose): the
+    /// candidate pan whose view, predicted from the map, has the smallest expected position
+    /// error (see [`crate::target::TargetCandidate::cost`]).
     fn choose_target(&mut self) {
         let estimate = self.ekf.estimate();
         let here = estimate.pose.pose2();
         let due = self.last_match_position.is_some_and(|p| p.dist(here.position()) >= self.params.min_travel);
-        let fresh = self.target.is_some_and(|(p, _)| p.dist(here.position()) < 0.25);
+        // The pan is in the body frame: a turn in place makes it stale as a drive does.
+        let fresh = self.target.is_some_and(|(p, _)| {
+            p.position().dist(here.position()) < 0.25
+                && rovernav_core::angle_diff(p.yaw, here.yaw).abs() < 0.05
+        });
         if !due || fresh || self.map.is_empty() {
             return;
         }
@@ -407,7 +413,7 @@ impl EkfMl {
         let best = rank_pans(&global, &here, &pans, &self.target_params)
             .ok()
             .and_then(|ranked| ranked.first().filter(|c| c.cost.is_finite()).map(|c| c.pan));
-        self.target = best.map(|pan| (here.position(), rovernav_core::wrap_angle(pan)));
+        self.target = best.map(|pan| (here, rovernav_core::wrap_angle(pan)));
     }
 
     /// Places clouds in the world map with the current estimate.
@@ -458,6 +464,8 @@ impl Localizer for EkfMl {
             self.choose_target();
             return;
         }
+        // These clouds are the view the target was chosen for (or came instead of it).
+        self.target = None;
         let estimate = self.ekf.estimate();
         let here = estimate.pose.pose2().position();
         let moved = self.last_match_position.is_none_or(|p| p.dist(here) >= self.params.min_travel);

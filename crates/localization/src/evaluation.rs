@@ -86,6 +86,8 @@ pub struct StepError {
     /// Standard deviations the matcher reported for those three (for a heading not searched,
     /// the prior's).
     pub sigma: [f64; 3],
+    /// Whether the match estimated the heading (else it held the prior's).
+    pub heading_estimated: bool,
     /// The matcher's failure probability.
     pub failure_probability: f64,
     /// Cells and poses the search scored.
@@ -101,7 +103,8 @@ pub struct SequenceReport {
     pub mean_abs_downrange: f64,
     /// Mean absolute crossrange error (m).
     pub mean_abs_crossrange: f64,
-    /// Fraction of downrange, crossrange and heading errors within three reported sigmas.
+    /// Fraction of the estimated quantities' errors (downrange, crossrange, and the heading
+    /// when the match estimated it) within three reported sigmas.
     pub within_three_sigma: f64,
 }
 
@@ -141,20 +144,17 @@ where
     });
     let steps = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let n = steps.len().max(1) as f64;
-    let within = steps
-        .iter()
-        .map(|s| {
-            [s.downrange, s.crossrange, s.yaw]
-                .iter()
-                .zip(&s.sigma)
-                .filter(|(e, sd)| e.abs() <= 3.0 * **sd)
-                .count()
-        })
-        .sum::<usize>() as f64;
+    let (mut within, mut checked) = (0usize, 0usize);
+    for step in &steps {
+        let axes = if step.heading_estimated { 3 } else { 2 };
+        let errors = [step.downrange, step.crossrange, step.yaw];
+        within += (0..axes).filter(|&a| errors[a].abs() <= 3.0 * step.sigma[a]).count();
+        checked += axes;
+    }
     Ok(SequenceReport {
         mean_abs_downrange: steps.iter().map(|s| s.downrange.abs()).sum::<f64>() / n,
         mean_abs_crossrange: steps.iter().map(|s| s.crossrange.abs()).sum::<f64>() / n,
-        within_three_sigma: within / (3.0 * n),
+        within_three_sigma: within as f64 / checked.max(1) as f64,
         steps,
     })
 }
@@ -219,6 +219,8 @@ where
     // view's position relative to it.
     let (ex, ey) = (sign * (result.pose.x - matched.x), sign * (result.pose.y - matched.y));
     let cov = result.covariance;
+    // The matcher reports a heading variance of 0 for a heading its window held fixed.
+    let heading_estimated = cov[2][2] > 0.0;
     let project = |u: [f64; 2]| {
         (u[0] * u[0] * cov[0][0] + 2.0 * u[0] * u[1] * cov[0][1] + u[1] * u[1] * cov[1][1]).max(0.0).sqrt()
     };
@@ -229,8 +231,9 @@ where
         sigma: [
             project([c, s]),
             project([-s, c]),
-            if setup.window_yaw > 0.0 { cov[2][2].max(0.0).sqrt() } else { setup.prior_sigma_yaw },
+            if heading_estimated { cov[2][2].sqrt() } else { setup.prior_sigma_yaw },
         ],
+        heading_estimated,
         failure_probability: result.failure_probability,
         poses_evaluated: result.poses_evaluated,
     })

@@ -305,6 +305,9 @@ pub struct SensorFrameMsg {
 /// The sensor name of a full-resolution mast image request.
 const MAST_FINE: &str = "mast_fine";
 
+/// The sensor names a sensing request may carry.
+const SENSE_SENSORS: [&str; 5] = ["mast", MAST_FINE, "body_front", "body_rear", "lidar"];
+
 const CAMERAS: [CameraKind; 4] =
     [CameraKind::Mast, CameraKind::BodyFront, CameraKind::BodyRear, CameraKind::Lidar];
 
@@ -636,7 +639,7 @@ impl CommandMsg {
                         object(
                             "sensing request",
                             &[
-                                ("sensor", enumeration("sensor", &CAMERAS.map(CameraKind::as_str))),
+                                ("sensor", enumeration("sensor", &SENSE_SENSORS)),
                                 ("pan", nullable(number("pan angle, body frame (rad); mast and lidar"))),
                             ],
                         ),
@@ -1078,6 +1081,7 @@ mod tests {
         let commands = [
             NavCommand::Sense(vec![
                 SenseRequest::Mast { pan: 0.25 },
+                SenseRequest::MastFine { pan: 3.0 },
                 SenseRequest::BodyFront,
                 SenseRequest::BodyRear,
                 SenseRequest::Lidar { pan: -0.5 },

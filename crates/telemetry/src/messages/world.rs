@@ -562,6 +562,7 @@ impl WorldMsg {
                         "sensor noise and mounting",
                         &[
                             ("mast", imager()),
+                            ("mast_fine", nullable(imager())),
                             ("body", imager()),
                             (
                                 "lidar",
