@@ -24,8 +24,18 @@
 //!   by more than two metres;
 //! * besides the recorded parameters (`d_LEAVE`, `d_reach`, `V_loop`), the C-obstacles of the
 //!   last view within reach of the rover are carried to the next one (the mast is blind within
-//!   a metre), and hazard contacts and stops at the edge of the terrain are recorded as small
-//!   C-obstacles; after one the rover backs out along the ground it just crossed;
+//!   a metre), unless they lie outside that blind zone and the new view has sensed their ground
+//!   again: the nearer view supersedes them (stale copies, seen from farther, pile up and close
+//!   the gaps of a rock field). Hazard contacts and stops at the edge of the terrain are
+//!   recorded as small C-obstacles; after one the rover backs out along the ground it just
+//!   crossed;
+//! * when planning finds no way on without a proof that the goal is unreachable (the "trapped"
+//!   and "no boundary vertex" halts: in clutter the local C-obstacles hem the rover in, closing
+//!   gaps that nearer views open), the rover records the dead end as a small C-obstacle and
+//!   drives back in reverse along its recorded trail (ground the body has crossed) before a new
+//!   motion-to-goal segment, at most `max_retreats` times (so too when the safety check keeps
+//!   refusing every motion from one place); a loop through `V_loop` around the goal still halts
+//!   at once;
 //! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
 //!   (a crater rim around it) it has no free way out;
@@ -78,6 +88,14 @@ pub struct RoverBugConfig {
     /// Distance from the sensing position within which the ground counts as visible (m): the
     /// rover's own footprint, seen from the previous position.
     pub near_visible: f64,
+    /// Carried C-obstacles whose hulls come within `near_visible` plus this margin of the new
+    /// sensing position always stay (m): the mast cannot see that ground. Farther ones stay
+    /// only where the new view has not sensed their ground again.
+    pub carry_margin: f64,
+    /// Distance driven back along the recorded trail when planning finds no way on (m).
+    pub retreat_distance: f64,
+    /// Retreats from dead ends before planning's give-up stands.
+    pub max_retreats: u32,
     /// Steps (sense-plan-act cycles) before asking for help.
     pub max_steps: u32,
     /// Wedges sensed in all before asking for help.
@@ -110,6 +128,9 @@ impl Default for RoverBugConfig {
             leave_margin: 0.1,
             interior_angle: 4f64.to_radians(),
             near_visible: 1.0,
+            carry_margin: 0.2,
+            retreat_distance: 1.5,
+            max_retreats: 5,
             max_steps: 200,
             max_wedges: 300,
             max_contacts_here: 6,
@@ -188,6 +209,17 @@ pub struct RoverBug {
     drive_from: Option<Point2>,
     /// Positions of the current boundary-following segment.
     visited: Vec<Point2>,
+    /// Positions the rover has stood at (estimate), oldest first: ground its body has crossed.
+    trail: Vec<Point2>,
+    /// Where planning found no way on: recorded as small C-obstacles so that no later subpath
+    /// leads back into the same dead end.
+    dead_ends: Vec<CObstacle>,
+    /// Retreats from dead ends so far.
+    retreats: u32,
+    /// Whether the current subpath is driven in reverse (a retreat along the trail).
+    reversing: bool,
+    /// Whether the latest halt is planning's give-up (no way on) rather than a proof.
+    stuck: bool,
     waypoints: VecDeque<Point2>,
     subpath: Vec<Point2>,
     finish: Option<(Outcome, String)>,
@@ -221,6 +253,11 @@ impl RoverBug {
             obstacles: Vec::new(),
             carried: Vec::new(),
             visited: Vec::new(),
+            trail: Vec::new(),
+            dead_ends: Vec::new(),
+            retreats: 0,
+            reversing: false,
+            stuck: false,
             contacts: Vec::new(),
             here: None,
             sensed_len: 0,
@@ -601,6 +638,7 @@ impl RoverBug {
         self.obstacles = view.evaluator.layers().c_obstacles(&self.terrain, &view.wedges, Some(goal));
         self.obstacles.retain(|o| o.vertices.len() >= 3);
         let fresh = self.obstacles.len();
+        self.supersede_carried();
         self.obstacles.extend(self.carried.iter().cloned());
         self.sensed_len = self.obstacles.len();
         self.safety_hazard = self.confirm_hazards();
@@ -610,6 +648,7 @@ impl RoverBug {
             self.drawn_obstacles.push(o.vertices.clone());
         }
         self.obstacles.extend(self.contacts.iter().cloned());
+        self.obstacles.extend(self.dead_ends.iter().cloned());
         // Keep-out zones are C-obstacles like any sensed one (their convex hulls, grown by the
         // same margin: conservative for a non-convex zone).
         for zone in &input.goal.keep_out {
@@ -623,6 +662,27 @@ impl RoverBug {
                 ));
             }
         }
+    }
+
+    /// Drops the carried C-obstacles that the current view supersedes: those outside the
+    /// mast's blind zone around the sensing position whose ground this view has sensed again
+    /// (the centre and at least half the hull's vertices in sensed cells). The fresh ones are
+    /// seen from nearer, so more accurately; stale copies would pile up and close gaps the
+    /// nearer view shows open. Within the blind zone, or where this view has not looked, the
+    /// carried ones stay.
+    fn supersede_carried(&mut self) {
+        let Some(view) = &self.view else { return };
+        let sensed = |p: Point2| view.evaluator.grid().at_world(p.x, p.y).is_some_and(|c| c.count > 0);
+        let blind = self.config.near_visible + self.config.carry_margin;
+        self.carried.retain(|o| {
+            if o.hull.is_empty() || hull_distance(o, view.origin) < blind {
+                return true;
+            }
+            let seen = o.hull.iter().filter(|&&p| sensed(p)).count();
+            let centre =
+                o.hull.iter().fold(Point2::new(0.0, 0.0), |a, &p| a.add(p)).scale(1.0 / o.hull.len() as f64);
+            !(sensed(centre) && 2 * seen >= o.hull.len())
+        });
     }
 
     /// C-obstacles of the safety layer's hazard cells that the view's C-obstacles miss (rocks
@@ -812,6 +872,7 @@ impl RoverBug {
                 self.execute(path);
                 return None;
             }
+            self.stuck = true;
             return self.halt(
                 Outcome::Unreachable,
                 "trapped: the mast scans overlap all around and no boundary vertex leads out",
@@ -991,9 +1052,107 @@ impl RoverBug {
             .collect()
     }
 
+    /// When planning finds no way on without a proof that the goal is unreachable (the local
+    /// C-obstacles hem the rover in: in clutter they close gaps a nearer view may open), drives
+    /// back in reverse along the recorded trail, over ground the body has already crossed, and
+    /// records the dead end as a small C-obstacle so that the next motion-to-goal segment
+    /// plans around it. At most `max_retreats` times; false when there is no trail to retrace.
+    fn retreat(&mut self, x: Point2, goal: Point2) -> bool {
+        if self.retreats >= self.config.max_retreats
+            || self.stats.sensing_actions >= self.config.max_wedges
+            || self.steps >= self.config.max_steps
+        {
+            return false;
+        }
+        let mut trail = self.trail.clone();
+        let mut path = vec![x];
+        let mut length = 0.0;
+        while let Some(p) = trail.pop() {
+            let last = *path.last().unwrap_or(&x);
+            if p.dist(last) < 0.05 {
+                continue;
+            }
+            length += p.dist(last);
+            path.push(p);
+            if length >= self.config.retreat_distance {
+                break;
+            }
+        }
+        if length < 0.3 {
+            return false;
+        }
+        // The retreat's end stays on the trail; the retraced part is left behind.
+        trail.push(*path.last().unwrap_or(&x));
+        self.trail = trail;
+        self.retreats += 1;
+        let growth = self.terrain.growth();
+        // Never around the goal: a goal inside a C-obstacle turns its vertices into goals.
+        if x.dist(goal) > growth {
+            self.dead_ends.push(CObstacle::from_hull(vec![x], growth, self.terrain.max_arc_step, 0));
+        }
+        self.finish = None;
+        self.mode = Mode::MotionToGoal;
+        self.visited.clear();
+        self.reversing = true;
+        self.execute(path);
+        true
+    }
+
+    /// Drives the queued subpath: a turn in place toward the next waypoint (the rear of the
+    /// rover when reversing) or an arc to it, each checked for safety first; a new step once
+    /// the subpath is done.
+    fn drive_waypoints(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
+        let x = pose.position();
+        while let Some(&next) = self.waypoints.front() {
+            if next.dist(x) < 0.05 {
+                self.waypoints.pop_front();
+                continue;
+            }
+            // Reversing, the rear leads: the heading error is taken from the reversed heading.
+            let sign = if self.reversing { -1.0 } else { 1.0 };
+            let lead = if self.reversing { pose.yaw + PI } else { pose.yaw };
+            let error = angle_diff(next.sub(x).angle(), lead);
+            if error.abs() > self.config.turn_threshold {
+                // The shorter way round, else the longer one, if the body's sweep is clear.
+                let long = error - error.signum() * 2.0 * PI;
+                let short_cells = self.motion_hazards(pose, &Self::turn_poses(pose, error));
+                let angle = if short_cells.is_empty() {
+                    error
+                } else if self.motion_hazards(pose, &Self::turn_poses(pose, long)).is_empty() {
+                    long
+                } else {
+                    return self.refuse(pose, goal);
+                };
+                self.last_motion = Some(2.0);
+                return NavCommand::Turn { angle };
+            }
+            let (distance, curvature) = Self::arc_to(x.dist(next), error);
+            // Backwards along an arc the yaw turns the other way for the same bend.
+            let (distance, curvature) = (sign * distance, sign * curvature);
+            let cells = self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature));
+            if !cells.is_empty() {
+                return self.refuse(pose, goal);
+            }
+            self.waypoints.pop_front();
+            self.last_motion = Some(sign);
+            self.drive_from = Some(x);
+            return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
+        }
+        // Subpath done: a goal vertex reached, or a new step.
+        if self
+            .obstacles
+            .iter()
+            .any(|o| o.contains_strict(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3))
+        {
+            return NavCommand::Finish(Outcome::Reached, "at a vertex of the goal's C-obstacle".into());
+        }
+        self.open_step(pose, goal)
+    }
+
     /// The new step to command instead of a motion the safety check refused (a later leg of
     /// the subpath: the first leg of every plan is checked); after repeated refusals here,
-    /// backs out if it can (see [`Self::escape`]) or asks for help.
+    /// backs out if it can (see [`Self::escape`]), else retreats along the trail (see
+    /// [`Self::retreat`]), else asks for help.
     fn refuse(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
         let x = pose.position();
         self.waypoints.clear();
@@ -1003,6 +1162,11 @@ impl RoverBug {
         if count > self.config.max_refusals_here {
             if let Some(escape) = self.escape(pose) {
                 return escape;
+            }
+            // Every plan from here is refused: back out over the ground the body came by.
+            if self.retreat(x, goal) {
+                self.refusals = (0, x);
+                return self.drive_waypoints(pose, goal);
             }
             return self.finish_now(
                 Outcome::HelpRequested,
@@ -1088,6 +1252,7 @@ impl RoverBug {
                 self.execute(path);
                 return None;
             }
+            self.stuck = true;
             return self.halt(
                 Outcome::HelpRequested,
                 "boundary following: the scans overlap all around and no boundary vertex leads on",
@@ -1102,6 +1267,7 @@ impl RoverBug {
     /// The sensing that opens a step in the current mode.
     fn open_step(&mut self, pose: Pose2, goal: Point2) -> NavCommand {
         self.view = None;
+        self.reversing = false;
         self.new_view(pose);
         if let Some((outcome, why)) = self.finish.clone() {
             return NavCommand::Finish(outcome, why);
@@ -1153,6 +1319,26 @@ impl RoverBug {
         }
         None
     }
+}
+
+/// Euclidean distance from `p` to a C-obstacle's hull (the hazard cells' convex hull, before
+/// growth); 0 inside it.
+fn hull_distance(o: &CObstacle, p: Point2) -> f64 {
+    let n = o.hull.len();
+    if n == 0 {
+        return f64::INFINITY;
+    }
+    if n >= 3 && o.hull_contains_strict(p) {
+        return 0.0;
+    }
+    (0..n)
+        .map(|i| {
+            let (a, b) = (o.hull[i], o.hull[(i + 1) % n]);
+            let d = b.sub(a);
+            let t = if d.dot(d) > 1e-18 { (p.sub(a).dot(d) / d.dot(d)).clamp(0.0, 1.0) } else { 0.0 };
+            p.dist(a.add(d.scale(t)))
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The outline of a sensed wedge in the world, for display.
@@ -1215,15 +1401,25 @@ impl Navigator for RoverBug {
                 // drive went (after a turn in place, hardly at all) leads onto ground the body
                 // has not covered.
                 let back = match (self.last_motion, self.drive_from) {
-                    (Some(sign), Some(from)) if sign > 0.0 && sign < 2.0 => x.dist(from).clamp(0.1, 0.3),
+                    (Some(sign), Some(from)) if sign.abs() < 2.0 => x.dist(from).clamp(0.1, 0.3),
                     _ => 0.3,
                 };
+                // Out the way the wheels came: forward after a contact driving in reverse.
+                let dir = if self.last_motion.is_some_and(|s| s < 0.0) { 1.0 } else { -1.0 };
                 self.backing_out = true;
-                self.last_motion = Some(-1.0);
-                return NavCommand::Drive { distance: -back, curvature: 0.0, guard: DriveGuard::default() };
+                self.reversing = false;
+                self.last_motion = Some(dir);
+                return NavCommand::Drive {
+                    distance: dir * back,
+                    curvature: 0.0,
+                    guard: DriveGuard::default(),
+                };
             }
         }
         self.backing_out = false;
+        if !self.reversing && self.trail.last().is_none_or(|p| p.dist(x) > 0.05) {
+            self.trail.push(x);
+        }
         if !input.frame.clouds.is_empty() {
             self.here = Some(pose);
             self.ingest(input);
@@ -1243,8 +1439,13 @@ impl Navigator for RoverBug {
                 Some((outcome, _)) => *outcome != Outcome::Reached,
                 None => cmd.is_none() && self.waypoints.is_empty() && !at_goal_vertex,
             };
+            let stuck = gave_up && (self.finish.is_none() || self.stuck);
+            self.stuck = false;
             if gave_up && let Some(escape) = self.escape(pose) {
                 return escape;
+            }
+            if stuck && self.retreat(x, goal) {
+                return self.drive_waypoints(pose, goal);
             }
             if let Some(cmd) = cmd {
                 return cmd;
@@ -1264,45 +1465,7 @@ impl Navigator for RoverBug {
                 return NavCommand::Finish(Outcome::HelpRequested, "no subpath from the current view".into());
             }
         }
-        while let Some(&next) = self.waypoints.front() {
-            if next.dist(x) < 0.05 {
-                self.waypoints.pop_front();
-                continue;
-            }
-            let error = angle_diff(next.sub(x).angle(), pose.yaw);
-            if error.abs() > self.config.turn_threshold {
-                // The shorter way round, else the longer one, if the body's sweep is clear.
-                let long = error - error.signum() * 2.0 * PI;
-                let short_cells = self.motion_hazards(pose, &Self::turn_poses(pose, error));
-                let angle = if short_cells.is_empty() {
-                    error
-                } else if self.motion_hazards(pose, &Self::turn_poses(pose, long)).is_empty() {
-                    long
-                } else {
-                    return self.refuse(pose, goal);
-                };
-                self.last_motion = Some(2.0);
-                return NavCommand::Turn { angle };
-            }
-            let (distance, curvature) = Self::arc_to(x.dist(next), error);
-            let cells = self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature));
-            if !cells.is_empty() {
-                return self.refuse(pose, goal);
-            }
-            self.waypoints.pop_front();
-            self.last_motion = Some(1.0);
-            self.drive_from = Some(x);
-            return NavCommand::Drive { distance, curvature, guard: DriveGuard::default() };
-        }
-        // Subpath done: a goal vertex reached, or a new step.
-        if self
-            .obstacles
-            .iter()
-            .any(|o| o.contains_strict(goal) && o.vertices.iter().any(|v| v.dist(x) < 0.3))
-        {
-            return NavCommand::Finish(Outcome::Reached, "at a vertex of the goal's C-obstacle".into());
-        }
-        self.open_step(pose, goal)
+        self.drive_waypoints(pose, goal)
     }
 
     fn planned_path(&self) -> Vec<Point2> {
@@ -1462,6 +1625,77 @@ mod tests {
         let under = bug_with_hazards(&[(0.15, 0.05)]);
         assert!(under.motion_hazards(start, &RoverBug::turn_poses(start, PI)).is_empty());
         assert!(under.motion_hazards(start, &RoverBug::arc_poses(start, 1.0, 0.0)).is_empty());
+    }
+
+    #[test]
+    fn hull_distance_is_the_euclidean_distance_to_the_hull() {
+        let o = square(0.0, 0.0, 1.0);
+        assert_eq!(hull_distance(&o, Point2::new(0.2, -0.3)), 0.0);
+        assert!((hull_distance(&o, Point2::new(3.0, 0.5)) - 2.0).abs() < 1e-9);
+        // Off a corner the distance is to the corner, not to the edge's line.
+        assert!((hull_distance(&o, Point2::new(4.0, 5.0)) - 5.0).abs() < 1e-9);
+        let point = CObstacle::from_hull(vec![Point2::new(1.0, 1.0)], 0.6, 30f64.to_radians(), 0);
+        assert!((hull_distance(&point, Point2::new(4.0, 5.0)) - 5.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn carried_obstacles_give_way_only_where_the_new_view_sensed_their_ground_again() {
+        use rovernav_core::{CameraKind, PointCloud, Pose3, PoseEstimate, Wedge};
+        let mut bug = bug_with(vec![]);
+        // Flat ground sensed from the origin over x in [0.5, 4], y in [-1, 1].
+        let points: Vec<[f32; 3]> = (0..70)
+            .flat_map(|i| (0..40).map(move |j| [0.5 + 0.05 * i as f32, -1.0 + 0.05 * j as f32, 0.0]))
+            .collect();
+        let wedge = Wedge { bearing: 0.0, half_angle: 0.6, min_range: 0.5, max_range: 5.0 };
+        let cloud = PointCloud { camera: CameraKind::Mast, origin: [0.0; 3], wedge, points };
+        let estimate = PoseEstimate { pose: Pose3::default(), covariance: [[0.0; 3]; 3] };
+        bug.view.as_mut().unwrap().evaluator.update(&[cloud], &estimate);
+        // Sensed again beyond the blind zone; sensed but within the blind zone (1.2 m); never
+        // looked at.
+        bug.carried = vec![square(3.0, 0.0, 0.2), square(0.9, 0.0, 0.2), square(3.0, 3.0, 0.2)];
+        bug.supersede_carried();
+        let centres: Vec<Point2> = bug
+            .carried
+            .iter()
+            .map(|o| o.hull.iter().fold(Point2::new(0.0, 0.0), |a, &p| a.add(p)).scale(0.25))
+            .collect();
+        assert_eq!(centres.len(), 2, "{centres:?}");
+        assert!(centres[0].dist(Point2::new(0.9, 0.0)) < 1e-9);
+        assert!(centres[1].dist(Point2::new(3.0, 3.0)) < 1e-9);
+    }
+
+    #[test]
+    fn a_retreat_retraces_the_trail_and_records_the_dead_end() {
+        let mut bug = bug_with(vec![]);
+        // An L-shaped trail: 1 m east, then 2 m north to the rover at (1, 2).
+        bug.trail = vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(1.0, 1.0)];
+        let x = Point2::new(1.0, 2.0);
+        assert!(bug.retreat(x, Point2::new(9.0, 9.0)));
+        // Back through (1, 1) to (1, 0): 2 m, the first trail point at least 1.5 m back.
+        let wp: Vec<Point2> = bug.waypoints.iter().copied().collect();
+        assert_eq!(wp, vec![Point2::new(1.0, 1.0), Point2::new(1.0, 0.0)]);
+        assert!(bug.reversing);
+        assert_eq!(bug.mode, Mode::MotionToGoal);
+        assert!(bug.dead_ends.len() == 1 && bug.dead_ends[0].contains_strict(x));
+        // The retraced part leaves the trail; its end stays.
+        assert_eq!(bug.trail, vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0)]);
+        // Reversing, the executor drives the rear to the waypoint along an arc.
+        bug.waypoints = VecDeque::from(vec![Point2::new(-1.0, 0.1)]);
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        let NavCommand::Drive { distance, curvature, .. } = bug.drive_waypoints(pose, Point2::new(9.0, 9.0))
+        else {
+            panic!("a reverse drive expected");
+        };
+        assert!(distance < 0.0);
+        let end = *RoverBug::arc_poses(pose, distance, curvature).last().unwrap();
+        assert!(end.position().dist(Point2::new(-1.0, 0.1)) < 1e-9, "{end:?}");
+        // Too short a trail, or the retreats used up: no retreat.
+        let mut short = bug_with(vec![]);
+        short.trail = vec![Point2::new(0.0, 0.1)];
+        assert!(!short.retreat(Point2::new(0.0, 0.0), Point2::new(9.0, 9.0)));
+        bug.retreats = bug.config.max_retreats;
+        bug.trail = vec![Point2::new(0.0, 0.0), Point2::new(5.0, 0.0)];
+        assert!(!bug.retreat(Point2::new(5.0, 3.0), Point2::new(9.0, 9.0)));
     }
 
     #[test]
