@@ -269,25 +269,22 @@ impl RangeGeometry {
 
     /// The mast pair panned to `pan`.
     pub fn mast(rover: &RoverConfig, model: &SensorModel, pan: f64) -> Self {
-        Self::pointed(
-            CameraKind::Mast,
-            [0.0, 0.0, rover.mast_height],
-            pan,
-            rover.mast_fov,
-            rover.mast_range,
-            &model.mast,
-        )
+        Self::mast_imaging(rover, &model.mast, pan)
     }
 
     /// The mast pair panned to `pan`, imaging at full resolution.
     pub fn mast_fine(rover: &RoverConfig, model: &SensorModel, pan: f64) -> Self {
+        Self::mast_imaging(rover, &model.mast_fine, pan)
+    }
+
+    fn mast_imaging(rover: &RoverConfig, imager: &RangeImagerModel, pan: f64) -> Self {
         Self::pointed(
             CameraKind::Mast,
             [0.0, 0.0, rover.mast_height],
             pan,
             rover.mast_fov,
             rover.mast_range,
-            &model.mast_fine,
+            imager,
         )
     }
 
