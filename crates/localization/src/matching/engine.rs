@@ -502,6 +502,18 @@ pub struct SearchOutcome {
     pub poses_tested: u64,
 }
 
+impl SearchOutcome {
+    /// Counts one pose scored explicitly and keeps it if it beats the best so far.
+    fn offer(&mut self, pose: [i32; 3], score: f64) {
+        self.boxes += 1;
+        self.poses_tested += 1;
+        if score > self.score {
+            self.score = score;
+            self.best = Some(pose);
+        }
+    }
+}
+
 /// Everything a matcher learnt about one match.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MatchDetails {
@@ -950,13 +962,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         let lookups_before = self.lookups;
         let inside = |p: [i32; 3], b: &([i32; 3], [i32; 3])| (0..3).all(|a| p[a] >= b.0[a] && p[a] <= b.1[a]);
         if let Some(p) = seed.filter(|p| !exclude.iter().any(|b| inside(*p, b))) {
-            let s = self.score_pose(p);
-            out.boxes += 1;
-            out.poses_tested += 1;
-            if s > out.score {
-                out.score = s;
-                out.best = Some(p);
-            }
+            out.offer(p, self.score_pose(p));
         }
         let root_lo = [-half[0], -half[1], -half[2]];
         let span = (2 * half[0].max(half[1]) + 1) as u32;
@@ -967,13 +973,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             heap.push(PoseCell { lo: root_lo, hi: half, level: root_level, bound: f64::INFINITY });
         } else if Some(root_lo) != seed && !exclude.iter().any(|b| inside(root_lo, b)) {
             // A window of one pose.
-            let s = self.score_pose(root_lo);
-            out.boxes += 1;
-            out.poses_tested += 1;
-            if s > out.score {
-                out.score = s;
-                out.best = Some(root_lo);
-            }
+            out.offer(root_lo, self.score_pose(root_lo));
         }
         while let Some(cell) = heap.pop() {
             if cell.bound <= out.score {
