@@ -439,7 +439,7 @@ impl EkfMl {
 
 impl Localizer for EkfMl {
     fn name(&self) -> &str {
-        "ekf-ml"
+        if self.params.select_targets { "ekf-ml-targets" } else { "ekf-ml" }
     }
 
     fn localization_target(&self) -> Option<f64> {

@@ -34,12 +34,12 @@ pub use target::{TargetParams, select_target};
 use rovernav_core::{Localizer, Pose3, RoverConfig};
 
 /// Names accepted by [`localizer_by_name`].
-pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf", "ekf-ml"];
+pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf", "ekf-ml", "ekf-ml-targets"];
 
 /// Whether the named localiser corrects its pose by terrain-map matching (and so wants the
 /// navigator to look back over the terrain it crossed).
 pub fn matches_terrain(name: &str) -> bool {
-    name == "ekf-ml"
+    matches!(name, "ekf-ml" | "ekf-ml-targets")
 }
 
 /// Builds a localiser by registry name, or `None` for an unknown name.
@@ -48,6 +48,13 @@ pub fn localizer_by_name(name: &str, config: &RoverConfig, initial: Pose3) -> Op
         "dead-reckoning" => Some(Box::new(DeadReckoning::new(config, initial))),
         "ekf" => Some(Box::new(Ekf::new(config, initial))),
         "ekf-ml" => Some(Box::new(EkfMl::new(config, initial))),
+        // Localisation target selection (paper 000 section 4.4) on: the look-back points where
+        // the map predicts the best fix.
+        "ekf-ml-targets" => Some(Box::new(EkfMl::with_params(
+            config,
+            initial,
+            EkfMlParams { select_targets: true, ..Default::default() },
+        ))),
         _ => None,
     }
 }

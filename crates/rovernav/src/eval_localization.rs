@@ -22,7 +22,7 @@ use anyhow::Context;
 use rovernav_core::{Localizer, NavCommand, NavInput, Pose2, Pose3, RoverConfig, SenseRequest};
 use rovernav_executive::World;
 use rovernav_localization::evaluation::{BnbSetup, SequenceSetup, bnb_efficiency, sequence_accuracy};
-use rovernav_localization::{DeadReckoning, EkfMl};
+use rovernav_localization::{DeadReckoning, EkfMl, EkfMlParams};
 use rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
 use rovernav_sim::{SensorModel, Simulator};
 use rovernav_terrain::procedural::{ClearPad, generate};
@@ -57,6 +57,10 @@ pub struct EvalLocalizationArgs {
     /// Navigator of the closed loop (registry name).
     #[arg(long, default_value = "astar-grid")]
     navigator: String,
+    /// Point the look-back at the localisation target the map predicts best (paper 000
+    /// section 4.4; the "ekf-ml-targets" localiser) instead of straight back.
+    #[arg(long)]
+    localization_targets: bool,
 }
 
 /// One closed-loop traverse with one localiser.
@@ -159,10 +163,13 @@ pub fn closed_loop_seed(
     length: f64,
     navigator: &str,
     look_back: bool,
+    localization_targets: bool,
 ) -> anyhow::Result<(LoopResult, LoopResult)> {
     let world = closed_loop_world(seed, length);
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let (mut ml, localizer) = drive(&world, navigator, EkfMl::new(&world.rover, initial), seed, look_back)?;
+    let params = EkfMlParams { select_targets: localization_targets, ..Default::default() };
+    let matcher = EkfMl::with_params(&world.rover, initial, params);
+    let (mut ml, localizer) = drive(&world, navigator, matcher, seed, look_back)?;
     let stats = localizer.stats();
     ml.fixes_used = stats.fixes_used;
     ml.fixes_rejected = stats.fixes_rejected;
@@ -232,7 +239,13 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
                     if seed > args.seeds {
                         break;
                     }
-                    match closed_loop_seed(seed, args.length, &args.navigator, !args.no_look_back) {
+                    match closed_loop_seed(
+                        seed,
+                        args.length,
+                        &args.navigator,
+                        !args.no_look_back,
+                        args.localization_targets,
+                    ) {
                         Ok((ml, dr)) => results.lock().expect("results").push((seed, ml, dr)),
                         Err(e) => *failure.lock().expect("failure") = Some(e),
                     }
@@ -260,6 +273,22 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
     let fixes_rejected: u64 = results.iter().map(|r| r.1.fixes_rejected).sum();
     let distance = results.iter().map(|r| r.1.distance_m).sum::<f64>() / n + 0.0;
     let reached = results.iter().filter(|r| r.1.reached).count();
+    let runs: Vec<serde_json::Value> = results
+        .iter()
+        .map(|(seed, ml, dr)| {
+            serde_json::json!({
+                "seed": seed,
+                "distance_m": ml.distance_m,
+                "reached": ml.reached,
+                "err_pct": 100.0 * ml.error_m / ml.distance_m.max(1e-9),
+                "dead_reckoning_err_pct": 100.0 * dr.error_m / dr.distance_m.max(1e-9),
+                "nees": ml.nees,
+                "fixes_used": ml.fixes_used,
+                "fixes_rejected": ml.fixes_rejected,
+            })
+        })
+        .collect();
+    let localizer = if args.localization_targets { "ekf-ml-targets" } else { "ekf-ml" };
 
     let figures = serde_json::json!({
         "bnb_cases": bnb.cases,
@@ -284,6 +313,8 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
         "closed_loop_within_3_sigma": within_3sigma,
         "fixes_used": fixes_used,
         "fixes_rejected": fixes_rejected,
+        "closed_loop_localizer": localizer,
+        "closed_loop_runs": runs,
         "wall_time_s": { "bnb": bnb_s, "sequence": sequence_s, "closed_loop": loop_s },
     });
     if args.json {
@@ -309,7 +340,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
         );
         println!(
             "closed loop ({} seeds, {:.0} m yard, {}, {reached} reached, {distance:.0} m driven on average): \
-             ekf-ml {ml_pct:.2}% of distance, dead reckoning {dr_pct:.2}%; fixes used {fixes_used}, rejected \
+             {localizer} {ml_pct:.2}% of distance, dead reckoning {dr_pct:.2}%; fixes used {fixes_used}, rejected \
              {fixes_rejected}; mean final NEES {nees:.2} (2 expected) [{loop_s:.1} s]",
             results.len(),
             args.length,

@@ -4,13 +4,25 @@
 
 mod common;
 
+use rovernav_telemetry::mcap;
+use rovernav_telemetry::messages::topics;
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
 
 /// Runs the small yard with a localiser; returns report.json as printed with `--json`.
 fn run_small_yard(localizer: &str) -> Value {
-    let dir = std::env::temp_dir().join(format!("rovernav-loc-report-{}-{localizer}", std::process::id()));
+    run_small_yard_logging(localizer).0
+}
+
+/// Same as [`run_small_yard`], also returning the pans of every full-resolution mast image the
+/// run's telemetry log records.
+fn run_small_yard_logging(localizer: &str) -> (Value, Vec<f64>) {
+    // Tests run in parallel and may run the same localiser: every run gets its own folder.
+    static RUNS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let dir =
+        std::env::temp_dir().join(format!("rovernav-loc-report-{}-{run}-{localizer}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let mission: PathBuf = dir.join("mission.toml");
@@ -24,8 +36,30 @@ fn run_small_yard(localizer: &str) -> Value {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let log = std::fs::read(dir.join("out").join("telemetry.mcap")).unwrap();
+    let mut pans = Vec::new();
+    for m in mcap::MessageStream::new(&log).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic == topics::COMMAND {
+            fine_pans(&serde_json::from_slice(&m.data).unwrap(), &mut pans);
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
-    report
+    (report, pans)
+}
+
+/// Collects the pans of the `mast_fine` sense requests anywhere in a message.
+fn fine_pans(v: &Value, out: &mut Vec<f64>) {
+    match v {
+        Value::Object(o) => {
+            if o.get("sensor").and_then(Value::as_str) == Some("mast_fine") {
+                out.extend(o.get("pan").and_then(Value::as_f64));
+            }
+            o.values().for_each(|x| fine_pans(x, out));
+        }
+        Value::Array(a) => a.iter().for_each(|x| fine_pans(x, out)),
+        _ => {}
+    }
 }
 
 fn count(stats: &Value, field: &str) -> u64 {
@@ -57,4 +91,26 @@ fn terrain_matching_run_reports_its_fixes_and_dead_reckoning_reports_none() {
     {
         assert_eq!(count(stats, field), 0, "dead reckoning makes no corrections: {stats}");
     }
+}
+
+#[test]
+fn target_selection_points_the_look_back_at_the_chosen_rearward_view() {
+    let pi = std::f64::consts::PI;
+    let wrap = |a: f64| (a + pi).rem_euclid(2.0 * pi) - pi;
+    let (plain, straight) = run_small_yard_logging("ekf-ml");
+    assert_eq!(plain["localizer"], "ekf-ml");
+    assert!(!straight.is_empty(), "the look-back images the crossed terrain");
+    assert!(
+        straight.iter().all(|p| wrap(p - pi).abs() < 1e-9),
+        "without targets it looks straight back: {straight:?}"
+    );
+
+    let (targeted, pans) = run_small_yard_logging("ekf-ml-targets");
+    assert_eq!(targeted["localizer"], "ekf-ml-targets");
+    assert!(count(&targeted["localization_stats"], "fixes_used") >= 1, "{targeted}");
+    // Every look-back is one of the three rearward candidates, and the prediction turns the mast
+    // off the straight-back axis at least once on this rocky yard.
+    let candidate = |p: f64| [pi, pi - pi / 4.0, pi + pi / 4.0].iter().any(|c| wrap(p - c).abs() < 1e-9);
+    assert!(pans.iter().all(|&p| candidate(p)), "{pans:?}");
+    assert!(pans.iter().any(|&p| wrap(p - pi).abs() > 0.1), "{pans:?}");
 }
