@@ -3,7 +3,7 @@
 //! of rocks and a goal inside a rock's C-obstacle.
 
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
-use rovernav_executive::{RunOutput, RunSettings, World, run_world};
+use rovernav_executive::{Mission, RunOutput, RunSettings, World, run_mission, run_world};
 use rovernav_sim::SensorModel;
 use rovernav_terrain::procedural::add_rocks;
 use rovernav_terrain::{Dem, Rock, Terrain};
@@ -135,4 +135,22 @@ fn goal_inside_a_rock_ends_at_a_vertex_of_its_c_obstacle() {
     assert_eq!(out.report.hazard_contacts, 0);
     // Rock radius 0.4 + growth 0.6, plus the hull's cell corners and the polygon's overshoot.
     assert!((0.9..1.4).contains(&out.report.goal_error_m), "goal error {}", out.report.goal_error_m);
+}
+
+/// Seed 14 of the default Mars yard: boxed in by a rock cluster, the rover retreated along its
+/// trail, but the safety check refused every turn in place toward the trail and each retreat
+/// was spent on the spot, recording a dead end where the rover stood, until it halted as
+/// trapped. Backing along an arc instead, it gets out and reaches the goal; the simulator's
+/// contact count is the truth for "clean".
+#[test]
+#[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
+fn seed_14_pinned_retreats_back_out_and_reach_the_goal_clean() {
+    let mut mission = Mission::default_mission();
+    mission.seed = 14;
+    mission.navigator = "roverbug".into();
+    let run = run_mission(&mission, "default seed 14", &mut |_| {}).expect("mission runs");
+    let r = &run.report;
+    assert!(r.optimal_length_m.is_some(), "seed 14 has a safe path in truth");
+    assert_eq!(r.outcome, "reached", "{}", r.message);
+    assert_eq!(r.hazard_contacts, 0);
 }

@@ -35,7 +35,8 @@
 //!   drives back in reverse along its recorded trail (ground the body has crossed) before a new
 //!   motion-to-goal segment, at most `max_retreats` times (so too when the safety check keeps
 //!   refusing every motion from one place); a loop through `V_loop` around the goal still halts
-//!   at once;
+//!   at once. A retreat whose turn in place the safety check refuses backs along an arc to its
+//!   waypoint when that sweep is clear (within 45 degrees of the rear);
 //! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
 //!   (a crater rim around it) it has no free way out;
@@ -1120,6 +1121,8 @@ impl RoverBug {
                     error
                 } else if self.motion_hazards(pose, &Self::turn_poses(pose, long)).is_empty() {
                     long
+                } else if let Some(arc) = self.reverse_arc(pose, next, error) {
+                    return arc;
                 } else {
                     return self.refuse(pose, goal);
                 };
@@ -1147,6 +1150,27 @@ impl RoverBug {
             return NavCommand::Finish(Outcome::Reached, "at a vertex of the goal's C-obstacle".into());
         }
         self.open_step(pose, goal)
+    }
+
+    /// A retreat whose turn in place the safety check refuses backs along an arc to the
+    /// waypoint instead, if that sweep is clear and the waypoint lies within 45 degrees of the
+    /// rear (the arc then strays from the chord by at most about a fifth of its length): pinned where
+    /// it stands, the rover otherwise spends every retreat on the spot and, each one recording
+    /// a dead end there, boxes itself in (seed 14 of the default yard).
+    fn reverse_arc(&mut self, pose: Pose2, next: Point2, error: f64) -> Option<NavCommand> {
+        if !self.reversing || error.abs() > 0.25 * PI {
+            return None;
+        }
+        let x = pose.position();
+        let (distance, curvature) = Self::arc_to(x.dist(next), error);
+        let (distance, curvature) = (-distance, -curvature);
+        if !self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature)).is_empty() {
+            return None;
+        }
+        self.waypoints.pop_front();
+        self.last_motion = Some(-1.0);
+        self.drive_from = Some(x);
+        Some(NavCommand::Drive { distance, curvature, guard: DriveGuard::default() })
     }
 
     /// The new step to command instead of a motion the safety check refused (a later leg of
@@ -1696,6 +1720,60 @@ mod tests {
         bug.retreats = bug.config.max_retreats;
         bug.trail = vec![Point2::new(0.0, 0.0), Point2::new(5.0, 0.0)];
         assert!(!bug.retreat(Point2::new(5.0, 3.0), Point2::new(9.0, 9.0)));
+    }
+
+    /// Smallest distance of a point from the body outline over the poses (Chebyshev-style, as
+    /// the safety check measures it; negative under the body), computed here independently.
+    fn body_clearance(rover: &RoverConfig, poses: &[Pose2], q: Point2) -> f64 {
+        poses
+            .iter()
+            .map(|p| {
+                let b = p.inverse_transform(q);
+                (b.x.abs() - 0.5 * rover.length).max(b.y.abs() - 0.5 * rover.width)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn seed_14_a_retreat_pinned_against_turning_backs_along_an_arc() {
+        // Hazard cells (at their grid centres) 0.45 m either side of the rover's centre: 0.15 m
+        // off its sides, but a turn in place of 30 degrees either way brings a corner within
+        // the 0.08 m margin.
+        let cells = [(0.05, 0.45), (0.05, -0.45)];
+        let mut bug = bug_with_hazards(&cells);
+        let rover = bug.rover.clone();
+        let m = bug.config.body_margin;
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        // The retreat's waypoint 2 m away, 30 degrees off the rear.
+        let a = 150f64.to_radians();
+        let wp = Point2::new(2.0 * a.cos(), 2.0 * a.sin());
+        let near = |poses: &[Pose2]| {
+            cells
+                .iter()
+                .map(|&(x, y)| body_clearance(&rover, poses, Point2::new(x, y)))
+                .fold(f64::INFINITY, f64::min)
+        };
+        // Truth: both turns in place toward it pass the cells within the margin.
+        let turn = -30f64.to_radians();
+        assert!(near(&RoverBug::turn_poses(pose, turn)) < m);
+        assert!(near(&RoverBug::turn_poses(pose, turn + 2.0 * PI)) < m);
+        bug.reversing = true;
+        bug.waypoints = VecDeque::from(vec![wp]);
+        let NavCommand::Drive { distance, curvature, .. } = bug.drive_waypoints(pose, Point2::new(9.0, 9.0))
+        else {
+            panic!("a reverse arc expected, not a refusal");
+        };
+        assert!(distance < 0.0);
+        let poses = RoverBug::arc_poses(pose, distance, curvature);
+        let end = *poses.last().unwrap();
+        assert!(end.position().dist(wp) < 1e-9, "{end:?}");
+        // The rear leads all the way: the end heading points the front away from the start.
+        assert!(angle_diff(end.yaw, wp.angle() + PI).abs() < 0.55, "{end:?}");
+        assert!(near(&poses) >= m, "the arc sweeps within {} m of a cell", near(&poses));
+        // Driving forward, the same refusal stands (only retreats back along an arc).
+        bug.reversing = false;
+        bug.waypoints = VecDeque::from(vec![Point2::new(2.0 * 30f64.to_radians().cos(), -1.0)]);
+        assert!(!matches!(bug.drive_waypoints(pose, Point2::new(9.0, 9.0)), NavCommand::Drive { .. }));
     }
 
     #[test]
