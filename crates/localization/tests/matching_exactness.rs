@@ -112,18 +112,21 @@ fn check_rover_sized_cases(count: u64, min_pose_ratio: f64, min_evaluation_ratio
 
 #[test]
 fn ml_branch_and_bound_equals_exhaustive_search_on_rover_sized_cases() {
-    // Measured: 8/8 exact, 1393x fewer single poses, 25.1x fewer evaluations.
-    check_rover_sized_cases(8, 300.0, 15.0);
+    // Measured: 8/8 exact, 844x fewer single poses, 72.3x fewer evaluations (25.1x before
+    // per-cell bound inheritance, dives, learnt cell plans and neighbouring-heading hints).
+    check_rover_sized_cases(8, 300.0, 60.0);
 }
 
-/// The 100 cases (about 100 s in the dev profile, 15 s in release): run with
+/// The 100 cases (about 100 s in the dev profile, 35 s in release): run with
 /// `cargo test --release -p rovernav-localization --test matching_exactness -- --ignored`.
-/// Measured (`rovernav eval localization`, 20 m global maps): 100/100 exact, 1283x fewer
-/// single poses, 23.2x fewer evaluations in all.
+/// Measured here (13 m global maps): 100/100 exact, 745x fewer single poses, 69.4x fewer
+/// evaluations in all; `rovernav eval localization` (20 m global maps): 100/100 exact, 704x
+/// fewer single poses, 62.5x fewer evaluations (23.2x before per-cell bound inheritance,
+/// dives, learnt cell plans and neighbouring-heading hints).
 #[test]
 #[ignore]
 fn ml_branch_and_bound_equals_exhaustive_search_on_100_cases() {
-    check_rover_sized_cases(100, 300.0, 15.0);
+    check_rover_sized_cases(100, 300.0, 50.0);
 }
 
 #[test]

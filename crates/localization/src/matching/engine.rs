@@ -27,6 +27,20 @@
 //!   score; cells in layers where nearly every block holds an occupied voxel take the best
 //!   score's bound without a lookup. The work is counted in lookups (see
 //!   [`SearchOutcome::evaluations`]).
+//! - Per-cell bounds are tight at fine blocks only: at 4 x 8 cells and more, ground cells find
+//!   their height layer somewhere in nearly every block, so coarse boxes rarely prune and the
+//!   work is in bounding the fine ones. Four things cut it (lattice poses per evaluation on
+//!   the 100 `rovernav eval localization` cases, 23.2 before): a box's per-cell bounds are
+//!   kept and its sub-boxes start from them, looking up only cells that can still tighten
+//!   (26.2); every box taken from the queue starts a greedy dive to a single pose, so that a
+//!   good score to prune against comes early (31.0 on 30 cases, 31.6 with the optimum known
+//!   in advance); each pyramid level learns which cells' lookups tighten its bounds and looks
+//!   up only those, best first (`CellPlan`, 44.8 on 30 cases); and a box of one heading looks
+//!   up first the cells that tightened the same block at the neighbouring heading, where every
+//!   cell lands within a voxel of where it lands here (59.3 on 30 cases). Single poses are
+//!   bounded on the distance transform before they are scored, and scored only if they may
+//!   win. Exactness is untouched: every bound is a sum of per-cell upper bounds, whichever
+//!   cells were looked up (62.5 on the 100 cases, all exact).
 //! - Local cells over unknown parts of the global map score a neutral constant instead of the
 //!   outlier density: the paper's choice biases matches towards maximum overlap (measured: 10-20
 //!   cm downrange bias between consecutive stereo views).
@@ -35,7 +49,7 @@
 //!   then counts for nothing, and only cells that discriminate poses pull the match.
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, HashMap};
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rovernav_core::{Grid2, Pose2, wrap_angle};
@@ -466,11 +480,91 @@ struct PoseCell {
     /// window).
     level: u32,
     bound: f64,
+    /// Slot of the box's per-cell bounds in the search's store (`NO_SLOT`: none kept).
+    slot: u32,
+}
+
+/// `PoseCell::slot` of a box without per-cell bounds.
+const NO_SLOT: u32 = u32::MAX;
+
+/// A box's per-cell bounds as its sub-boxes start from them: upper bounds rounded up to f32,
+/// and their sum.
+#[derive(Clone, Copy)]
+struct Inherited<'b> {
+    values: &'b [f32],
+    sum: f64,
+}
+
+/// The per-cell bounds of the boxes in a search's queue, `n` per slot (slot `ROOT_SLOT`: the
+/// trivial bounds), rounded up to f32 (still upper bounds, in half the memory of f64).
+struct BoundStore {
+    values: Vec<f32>,
+    sums: Vec<f64>,
+    free: Vec<u32>,
+    n: usize,
+}
+
+/// The slot of the trivial bounds, which every box's bounds are tightened from.
+const ROOT_SLOT: u32 = 0;
+
+impl BoundStore {
+    /// A store holding the trivial bounds.
+    fn new(trivial: &[f64]) -> Self {
+        let values: Vec<f32> = trivial.iter().map(|&t| round_up_f32(t)).collect();
+        let sum = values.iter().map(|&v| f64::from(v)).sum();
+        Self { values, sums: vec![sum], free: Vec::new(), n: trivial.len() }
+    }
+
+    /// The bounds kept in `slot` (the trivial ones for `NO_SLOT`).
+    fn get(&self, slot: u32) -> Inherited<'_> {
+        let slot = if slot == NO_SLOT { ROOT_SLOT } else { slot };
+        let at = slot as usize * self.n;
+        Inherited { values: &self.values[at..at + self.n], sum: self.sums[slot as usize] }
+    }
+
+    /// Keeps the bounds of a box: its parent's (in `parent`) tightened by `changes`;
+    /// `NO_SLOT` when the store is full.
+    fn keep(&mut self, parent: u32, changes: &[(u32, f64)]) -> u32 {
+        let parent = if parent == NO_SLOT { ROOT_SLOT } else { parent };
+        let slot = match self.free.pop() {
+            Some(slot) => slot,
+            None if self.values.len() + self.n <= MAX_STORED_BOUNDS => {
+                self.values.resize(self.values.len() + self.n, 0.0);
+                self.sums.push(0.0);
+                (self.sums.len() - 1) as u32
+            }
+            None => return NO_SLOT,
+        };
+        let (from, at) = (parent as usize * self.n, slot as usize * self.n);
+        self.values.copy_within(from..from + self.n, at);
+        let mut sum = self.sums[parent as usize];
+        for &(i, bound) in changes {
+            let kept = &mut self.values[at + i as usize];
+            let tightened = round_up_f32(bound);
+            sum += f64::from(tightened) - f64::from(*kept);
+            *kept = tightened;
+        }
+        self.sums[slot as usize] = sum;
+        slot
+    }
+
+    /// Frees a slot (`NO_SLOT` and `ROOT_SLOT` are ignored).
+    fn release(&mut self, slot: u32) {
+        if slot != NO_SLOT && slot != ROOT_SLOT {
+            self.free.push(slot);
+        }
+    }
+}
+
+/// The smallest f32 not below `v`.
+fn round_up_f32(v: f64) -> f32 {
+    let f = v as f32;
+    if f64::from(f) < v { f.next_up() } else { f }
 }
 
 impl PartialEq for PoseCell {
     fn eq(&self, other: &Self) -> bool {
-        self.bound.total_cmp(&other.bound) == Ordering::Equal
+        self.cmp(other) == Ordering::Equal
     }
 }
 impl Eq for PoseCell {}
@@ -498,7 +592,8 @@ pub struct SearchOutcome {
     pub evaluations: u64,
     /// Boxes bounded and poses scored, whatever their cost.
     pub boxes: u64,
-    /// Of those, single poses scored explicitly.
+    /// Of those, single poses (bounded on the distance transform, and scored explicitly when
+    /// they might win).
     pub poses_tested: u64,
 }
 
@@ -525,8 +620,8 @@ pub struct MatchDetails {
     pub lattice: PoseLattice,
     /// Score of the best pose outside the peak, when one came within the failure margin.
     pub runner_up: Option<f64>,
-    /// Single poses the main search scored explicitly (the rest of `poses_evaluated` is the
-    /// lookups of box bounds, in poses' worth).
+    /// Single poses the main search bounded or scored (`poses_evaluated` counts their lookups
+    /// with those of the box bounds, in poses' worth).
     pub poses_tested: u64,
     /// Evaluations spent on the failure-probability search.
     pub failure_search_evaluations: u64,
@@ -558,6 +653,127 @@ impl Placement {
     }
 }
 
+/// How the box bounds of one pyramid level choose and order the local cells they look up.
+///
+/// Any subset of cells gives a valid bound (the others keep their parent box's bound), so the
+/// choice only trades lookups against pruning. Each lookup's decrease of its cell's bound is
+/// recorded, and cells are looked up in order of their mean decrease per lookup (shrunk
+/// towards a prior from the cell's layer), skipping cells whose expected decrease is below
+/// the level's [`min_rate_units`]. Why: whether a cell's lookup tightens a bound depends on
+/// where it lands (a ground cell whose landing region holds its height layer everywhere never
+/// does), which the layer statistics alone cannot tell and a few hundred lookups reveal.
+#[derive(Clone, Debug, Default)]
+struct CellPlan {
+    /// All local cells, highest expected decrease first.
+    order: Vec<usize>,
+    /// How many cells at the front of `order` are looked up.
+    active: usize,
+    /// Per cell: lookups made at this level and the summed decrease of its bound they brought
+    /// (side by side: the search touches both at once).
+    tally: Vec<[f32; 2]>,
+    /// Per cell: prior decrease per lookup (its layer's fraction of blocks without an
+    /// occupied voxel times the loss of a one-voxel miss).
+    prior: Vec<f32>,
+    /// Lookups made at this level since `order` was sorted.
+    since_sort: usize,
+    /// Smallest expected decrease per lookup worth a lookup.
+    min_rate: f32,
+}
+
+/// Weight of a cell's prior decrease, in lookups.
+const PRIOR_LOOKUPS: f32 = 4.0;
+
+/// Lookups, in local cells' worth, between re-sorts of a level's cell order. Measured on 30
+/// of the `rovernav eval localization` cases: 57.8 lattice poses per evaluation at 2, 57.1 at
+/// 4, 54.4 at 16; at 2 the sorts took 13 % of the bench's match time (39 000 local cells).
+const RESORT_EVERY: usize = 4;
+
+impl CellPlan {
+    /// Expected decrease per lookup of cell `i`.
+    fn rate(&self, i: usize) -> f32 {
+        let [lookups, decrease] = self.tally[i];
+        (decrease + self.prior[i] * PRIOR_LOOKUPS) / (lookups + PRIOR_LOOKUPS)
+    }
+
+    /// Sorts the cells by expected decrease (ties in a fixed scattered order, so that equal
+    /// cells are not taken row by row) and sets how many are worth a lookup.
+    fn sort(&mut self) {
+        let rates: Vec<f32> = (0..self.order.len()).map(|i| self.rate(i)).collect();
+        // One integer key per cell, sorted in a flat array (a sort of tens of thousands of
+        // cells runs often): the rate's bits in descending total order, then the spread, a
+        // bijection of the index, so that the keys are distinct and the order determined.
+        let descending = |r: f32| {
+            let bits = r.to_bits();
+            !(if bits >> 31 == 1 { !bits } else { bits | 1 << 31 })
+        };
+        let mut keys: Vec<(u64, u32)> = rates
+            .iter()
+            .enumerate()
+            .map(|(i, &r)| {
+                let spread = (i as u32).wrapping_mul(2_654_435_761);
+                ((u64::from(descending(r)) << 32) | u64::from(spread), i as u32)
+            })
+            .collect();
+        keys.sort_unstable_by_key(|&(key, _)| key);
+        for (slot, &(_, i)) in self.order.iter_mut().zip(&keys) {
+            *slot = i as usize;
+        }
+        self.active = self.order.iter().take_while(|&&i| rates[i] >= self.min_rate).count();
+        self.since_sort = 0;
+    }
+}
+
+/// Smallest expected decrease per lookup (in units of the loss of a one-voxel miss) for which
+/// a level's box bounds look a cell up.
+///
+/// Measured on 30 of the `rovernav eval localization` cases (lattice poses per evaluation):
+/// coarse blocks (level >= 5, 4 x 8 cells and more) rarely prune, so only cells that nearly
+/// always tighten them are looked up there (0.1: 37.8, 0.15: 39.1, 0.25: 42.8, 0.4: 43.7,
+/// 0.6: 44.8); fine blocks need most cells to prune (level 4 at 0.15: 36.4, 0.07: 38.9,
+/// 0.04: best; levels 1-3 at 0.03: 40.4, 0.05: best, 0.08: equal). Single poses take every
+/// cell: a pose that is not pruned is scored in full anyway.
+fn min_rate_units(level: usize) -> f64 {
+    match level {
+        0 => 0.0,
+        1..=3 => 0.05,
+        4 => 0.04,
+        _ => 0.6,
+    }
+}
+
+/// Pyramid levels whose box bounds take their cell order from the same block at a
+/// neighbouring heading (see `Scorer::bound_block`); measured: levels 1-4 give 59.3 lattice
+/// poses per evaluation, 1-2 give 46.4, 1-6 give 58.9 (the learnt order alone: 45.7).
+const NEIGHBOUR_HINT_LEVELS: std::ops::RangeInclusive<u32> = 1..=4;
+
+/// Most per-cell bounds (f32) the search keeps for the boxes in its queue (64 MB); beyond it
+/// boxes keep none and their children start from the trivial bounds.
+const MAX_STORED_BOUNDS: usize = 1 << 24;
+
+/// Most cells the neighbouring-heading hints hold at once (32 MB).
+const MAX_HINT_ENTRIES: usize = 1 << 22;
+
+/// A box is pruned when its bound is below the best score by at least this: a hair of slack
+/// against the rounding of sums taken in different orders.
+const PRUNE_MARGIN: f64 = 1e-9;
+
+/// What a box bound reads of one local cell, side by side: the bounds visit cells in an
+/// order of their own, and one cache line per cell keeps that cheap on large local maps.
+#[derive(Clone, Copy, Debug)]
+struct HotCell {
+    x: f64,
+    y: f64,
+    /// Offset of the cell's height layer in the voxel array, `None` outside the layers.
+    layer: Option<usize>,
+    /// Distance from the rover origin (voxels).
+    radius: f64,
+    neutral: f64,
+    trivial: f64,
+}
+
+/// A box of one heading by (pyramid level, block corner x, y, heading).
+type HintKey = (u32, i32, i32, i32);
+
 /// Sub-cell steps of the table that turns a lower bound on a distance into a score bound.
 const BOUND_STEPS_PER_CELL: f64 = 16.0;
 
@@ -577,28 +793,33 @@ pub struct Scorer<'a, S: DistanceScore> {
     pad: f64,
     /// Per local cell: its score over an unknown part of the global map.
     neutral: Vec<f64>,
+    /// Per local cell: its trivial bound, the best of the best score and its neutral score.
+    trivial: Vec<f64>,
+    /// The sum of `trivial`.
+    trivial_all: f64,
+    /// Per local cell: what box bounds read of it.
+    hot: Vec<HotCell>,
     /// How cells are bounded.
     bound_kind: BoundKind,
     /// How cells are split.
     split: SplitRule,
-    /// Per pyramid level: the local cells whose bound at that level needs a lookup (see
-    /// `Scorer::bound_block`).
-    looked_up: Vec<Vec<usize>>,
-    /// Per pyramid level: the summed trivial bound of all cells.
-    trivial_all: Vec<f64>,
+    /// Per pyramid level: which cells its box bounds look up, in which order.
+    plans: Vec<CellPlan>,
+    /// Per (level, block corner x, y, heading) of single-heading boxes bounded at
+    /// [`NEIGHBOUR_HINT_LEVELS`]: the cells looked up and their decrease from the trivial
+    /// bound, a guide (never a bound) for the same block at the next heading.
+    hints: HashMap<HintKey, Vec<(u32, f32)>>,
+    /// Cells held in `hints`, all boxes together.
+    hint_entries: usize,
+    /// Per local cell: the `hint_generation` of the last hint that held it.
+    in_hint: Vec<u32>,
+    /// Counter of box bounds, to mark hint membership without clearing `in_hint`.
+    hint_generation: u32,
     /// Distance-transform lookups made so far (one per local cell per pose scored or box
-    /// bounded; none for a cell bounded trivially).
+    /// bounded; none for a cell whose bound is inherited or trivial).
     lookups: u64,
     _score: std::marker::PhantomData<&'a S>,
 }
-
-/// A local cell gets a lookup in a box bound of some pyramid level only if, in its layer,
-/// at least this fraction of the blocks of that level have no occupied voxel; otherwise its
-/// lookup would nearly always return distance zero, whose bound (the best score) it gets
-/// without one. Any choice keeps the bound valid; this one trades lookups against pruning.
-/// (Measured on the `rovernav eval localization` cases: 2 % and 20 % look up more cells for
-/// no fewer boxes; the ground layers fall below 10 % at blocks of 8 x 16 cells and more.)
-const INFORMATIVE_FRACTION: f32 = 0.1;
 
 impl<'a, S: DistanceScore> Scorer<'a, S> {
     /// A scorer over the lattice of a search window.
@@ -628,45 +849,68 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             roots,
             pad: cap_d.floor() + 1.0,
             neutral: vec![score.score(neutral_distance); cells.len()],
+            trivial: Vec::new(),
+            trivial_all: 0.0,
+            hot: Vec::new(),
             bound_kind,
             split,
-            looked_up: Vec::new(),
-            trivial_all: Vec::new(),
+            plans: Vec::new(),
+            hints: HashMap::new(),
+            hint_entries: 0,
+            in_hint: vec![0; cells.len()],
+            hint_generation: 0,
             lookups: 0,
             _score: std::marker::PhantomData,
         };
-        scorer.choose_looked_up_cells();
+        scorer.plan_cells();
         scorer
     }
 
-    /// Fills `looked_up` and `trivial_all` from the layers' fractions of informative blocks
-    /// and the current neutral scores.
-    fn choose_looked_up_cells(&mut self) {
+    /// Sets the trivial bounds from the current neutral scores and starts each level's cell
+    /// plan from its prior (forgetting what was learnt).
+    fn plan_cells(&mut self) {
         let v = self.voxels;
         let plane = v.rows * v.cols;
         let best_anywhere = self.exact[0];
-        self.looked_up.clear();
-        self.trivial_all.clear();
-        for fractions in &v.nonzero_fraction {
-            let mut cells = Vec::new();
-            let mut all = 0.0;
-            for (i, layer) in self.cells.layer_offset.iter().enumerate() {
-                let informative =
-                    layer.is_none_or(|offset| fractions[offset / plane] >= INFORMATIVE_FRACTION);
-                all += best_anywhere.max(self.neutral[i]);
-                if informative {
-                    cells.push(i);
-                }
-            }
-            // Most informative layers first, so that a box that cannot beat the best pose is
-            // found out after few lookups.
-            let fraction =
-                |i: usize| self.cells.layer_offset[i].map_or(1.0, |offset| fractions[offset / plane]);
-            let spread = |i: usize| (i as u64).wrapping_mul(2_654_435_761) % (1 << 32);
-            cells.sort_by(|&a, &b| fraction(b).total_cmp(&fraction(a)).then(spread(a).cmp(&spread(b))));
-            self.looked_up.push(cells);
-            self.trivial_all.push(all);
-        }
+        self.trivial = self.neutral.iter().map(|n| best_anywhere.max(*n)).collect();
+        self.trivial_all = self.trivial.iter().sum();
+        self.hot = (0..self.cells.len())
+            .map(|i| HotCell {
+                x: self.cells.xs[i],
+                y: self.cells.ys[i],
+                layer: self.cells.layer_offset[i],
+                radius: self.cells.radii[i],
+                neutral: self.neutral[i],
+                trivial: self.trivial[i],
+            })
+            .collect();
+        let miss = best_anywhere - self.exact[1.min(self.exact.len() - 1)];
+        let n = self.cells.len();
+        self.plans = v
+            .nonzero_fraction
+            .iter()
+            .enumerate()
+            .map(|(level, fractions)| {
+                let prior = (0..n)
+                    .map(|i| {
+                        let f = self.cells.layer_offset[i].map_or(1.0, |offset| fractions[offset / plane]);
+                        (f64::from(f) * miss) as f32
+                    })
+                    .collect();
+                let mut plan = CellPlan {
+                    order: (0..n).collect(),
+                    active: 0,
+                    tally: vec![[0.0; 2]; n],
+                    prior,
+                    since_sort: 0,
+                    min_rate: (min_rate_units(level) * miss) as f32,
+                };
+                plan.sort();
+                plan
+            })
+            .collect();
+        self.hints.clear();
+        self.hint_entries = 0;
     }
 
     /// The pose lattice.
@@ -774,7 +1018,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 *neutral = s / f64::from(c);
             }
         }
-        self.choose_looked_up_cells();
+        self.plan_cells();
     }
 
     /// The exact score of one lattice pose.
@@ -803,7 +1047,16 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0) as u32 + 1;
                 // Square block of side 2^a >= span: level 2a.
                 let a = span.next_power_of_two().trailing_zeros();
-                self.bound_block(lo, 2 * a, lo[2], hi[2], f64::NEG_INFINITY)
+                let store = BoundStore::new(&self.trivial);
+                self.bound_block(
+                    lo,
+                    2 * a,
+                    lo[2],
+                    hi[2],
+                    f64::NEG_INFINITY,
+                    store.get(ROOT_SLOT),
+                    &mut Vec::new(),
+                )
             }
         }
     }
@@ -861,54 +1114,106 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
     /// swept at its radius plus the rounding of both poses to voxels), as in paper 000's
     /// `max(D_i^c - Delta_C, 0)` with `D_i^c` the block's minimum. A cell scores at least its
     /// neutral score when some pose of the box can put it over unknown ground or off the grid.
-    fn bound_block(&mut self, lo: [i32; 3], level: u32, k_lo: i32, k_hi: i32, threshold: f64) -> f64 {
+    ///
+    /// Each cell starts from its bound for the parent box (`parent`, rounded up to f32; the
+    /// trivial bounds without one), which holds for every sub-box, and only the cells of the
+    /// level's [`CellPlan`] are looked up, in its order (or, at [`NEIGHBOUR_HINT_LEVELS`], in
+    /// the order of the decreases the same block brought at a neighbouring heading, whose
+    /// cells land within a voxel of where they land here). The per-cell bounds are left in
+    /// `values`; the partial sum is a bound too, so the box is dropped as soon as it falls to
+    /// `threshold`.
+    #[allow(clippy::too_many_arguments)]
+    fn bound_block(
+        &mut self,
+        lo: [i32; 3],
+        level: u32,
+        k_lo: i32,
+        k_hi: i32,
+        threshold: f64,
+        parent: Inherited<'_>,
+        changes: &mut Vec<(u32, f64)>,
+    ) -> f64 {
         let v = self.voxels;
-        let best_anywhere = self.exact[0];
+        let capped = self.exact[v.cap as usize];
+        let n = self.cells.len();
+        let mut sum = parent.sum;
         if level as usize > v.pyramid.len() {
-            // No pyramid level this coarse: only the trivial bound.
-            return self.neutral.iter().map(|n| n.max(best_anywhere)).sum();
+            // No pyramid level this coarse: only the parent's bound.
+            return sum;
         }
-        let cells = &self.looked_up[level as usize];
+        let mut plan = std::mem::take(&mut self.plans[level as usize]);
+        if plan.since_sort >= RESORT_EVERY * n {
+            plan.sort();
+        }
+        let k_center = k_lo + (k_hi - k_lo) / 2;
+        let hinted = k_lo == k_hi && NEIGHBOUR_HINT_LEVELS.contains(&level);
+        // The hint's cells that were worth their lookup at the neighbouring heading, largest
+        // decrease first, then the plan's cells the hint did not look up (the others were not
+        // worth it there).
+        let mut tightened: Vec<(u32, f32)> = Vec::new();
+        self.hint_generation = self.hint_generation.wrapping_add(1);
+        let generation = self.hint_generation;
+        let mut use_hint = false;
+        if hinted {
+            let key = |k: i32| (level, lo[0], lo[1], k);
+            if let Some(hint) =
+                self.hints.get(&key(k_center - 1)).or_else(|| self.hints.get(&key(k_center + 1)))
+            {
+                use_hint = true;
+                tightened.extend(hint.iter().copied().filter(|&(_, decrease)| decrease >= plan.min_rate));
+                tightened.sort_unstable_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                for &(i, _) in hint {
+                    self.in_hint[i as usize] = generation;
+                }
+            }
+        }
+        let in_hint = &self.in_hint;
+        let planned = plan.order[..plan.active].iter().copied();
+        let cells = tightened
+            .iter()
+            .map(|&(i, _)| i as usize)
+            .chain(planned.filter(|&i| !use_hint || in_hint[i] != generation));
+        let mut record = Vec::new();
         let (wx, wy) = block_size(level);
         let distances: &[u8] = if level == 0 { &[] } else { &v.pyramid[level as usize - 1] };
         let distance_at = |index: usize| -> usize {
             if level == 0 { usize::from(v.squared[index].min(255)) } else { usize::from(distances[index]) }
         };
         let unknown = &v.unknown_pyramid[level as usize];
-        let k_center = k_lo + (k_hi - k_lo) / 2;
         let k_extent = (k_center - k_lo).max(k_hi - k_center);
         let (rotation_fixed, rotation_per_radius) = self.rotation_bound(k_extent);
-        let capped = self.exact[v.cap as usize];
         let (cols, rows) = (v.cols as i64, v.rows as i64);
         let half_diagonal = 0.5 * (wx as f64).hypot(wy as f64);
         let place = self.placement([lo[0], lo[1], k_center]);
-        // Start from every cell's trivial bound and tighten cell by cell: the partial sum is a
-        // bound too, so the box is pruned as soon as it falls to the threshold.
-        let mut sum = self.trivial_all[level as usize];
         let mut looked = 0u64;
-        for &i in cells {
+        for i in cells {
             if sum <= threshold {
                 break;
             }
+            let before = f64::from(parent.values[i]);
+            let c = &self.hot[i];
+            if before <= capped.min(c.neutral) {
+                // Already as low as any pose can make it.
+                continue;
+            }
             looked += 1;
-            sum -= best_anywhere.max(self.neutral[i]);
-            let (col, row) = place.voxel(self.cells.xs[i], self.cells.ys[i]);
+            plan.tally[i][0] += 1.0;
+            let (col, row) = place.voxel(c.x, c.y);
             let inside = col >= 0 && row >= 0 && col + wx as i64 <= cols && row + wy as i64 <= rows;
             if !inside {
-                sum += best_anywhere.max(self.neutral[i]);
                 continue;
             }
             let cell = row as usize * v.cols + col as usize;
             let (known_bound, may_be_unknown) = if k_extent == 0 {
-                let known_bound = match self.cells.layer_offset[i] {
+                let known_bound = match c.layer {
                     Some(layer) => self.exact[distance_at(layer + cell).min(v.cap as usize)],
                     None => capped,
                 };
                 (known_bound, unknown[cell])
             } else {
                 // A hair of slack keeps the bound above the exact score despite rounding.
-                let delta = rotation_fixed + rotation_per_radius * self.cells.radii[i] + 1e-9;
-                let known_bound = match self.cells.layer_offset[i] {
+                let delta = rotation_fixed + rotation_per_radius * c.radius + 1e-9;
+                let known_bound = match c.layer {
                     Some(layer) => {
                         let d = self.roots[distance_at(layer + cell).min(v.cap as usize)] - delta;
                         let step = (d.max(0.0) * BOUND_STEPS_PER_CELL) as usize;
@@ -922,20 +1227,61 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 let reach = half_diagonal + delta + 1.0;
                 (known_bound, unknown[cell] || f64::from(v.to_unknown[centre]) <= reach * reach)
             };
-            sum += if may_be_unknown { known_bound.max(self.neutral[i]) } else { known_bound };
+            let bound = if may_be_unknown { known_bound.max(c.neutral) } else { known_bound };
+            plan.tally[i][1] += (before - bound).max(0.0) as f32;
+            if hinted {
+                record.push((i as u32, (c.trivial - bound).max(0.0) as f32));
+            }
+            if bound < before {
+                changes.push((i as u32, bound));
+                sum -= before - bound;
+            }
         }
         self.lookups += looked;
+        plan.since_sort += looked as usize;
+        self.plans[level as usize] = plan;
+        if hinted {
+            if self.hint_entries + record.len() > MAX_HINT_ENTRIES {
+                // Hints only guide the order: forgetting them keeps the memory bounded on
+                // large local maps.
+                self.hints.clear();
+                self.hint_entries = 0;
+            }
+            self.hint_entries += record.len();
+            if let Some(old) = self.hints.insert((level, lo[0], lo[1], k_center), record) {
+                self.hint_entries -= old.len();
+            }
+        }
         sum
     }
 
-    /// Bound of one box of the search tree.
-    fn bound_search_cell(&mut self, cell: &PoseCell, threshold: f64) -> f64 {
+    /// Bound of one box of the search tree from its parent's per-cell bounds, pushing the
+    /// cells it tightened to `changes`; a single pose's exact score when it may beat
+    /// `threshold`.
+    fn bound_search_cell(
+        &mut self,
+        cell: &PoseCell,
+        threshold: f64,
+        parent: Inherited<'_>,
+        changes: &mut Vec<(u32, f64)>,
+    ) -> f64 {
         if cell.lo == cell.hi {
+            if self.bound_kind == BoundKind::MinPool {
+                // Level 0 of the pyramid is the distance transform itself: the pose's partial
+                // sum often shows it cannot win before every cell is looked up.
+                let partial =
+                    self.bound_block(cell.lo, 0, cell.lo[2], cell.hi[2], threshold, parent, changes);
+                if partial <= threshold {
+                    return partial;
+                }
+            }
             return self.score_pose(cell.lo);
         }
         match self.bound_kind {
             BoundKind::Distance => self.bound_distance(cell.lo, cell.hi),
-            BoundKind::MinPool => self.bound_block(cell.lo, cell.level, cell.lo[2], cell.hi[2], threshold),
+            BoundKind::MinPool => {
+                self.bound_block(cell.lo, cell.level, cell.lo[2], cell.hi[2], threshold, parent, changes)
+            }
         }
     }
 
@@ -945,11 +1291,17 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
     ///
     /// The translation part of every box is a pyramid block (2^a x 2^a or 2^a x 2^(a+1)
     /// lattice steps, clipped to the window), so that [`BoundKind::MinPool`] bounds it with
-    /// one lookup per local cell; boxes are taken best bound first, and split in two along
-    /// heading or along the block's longer side as the [`SplitRule`] says. The work is counted
-    /// in distance-transform lookups divided by the number of local cells (a pose scored costs
-    /// one; a box bound costs the lookups it made before it was decided), and the boxes bounded
-    /// are counted separately.
+    /// one lookup per local cell; boxes are split in two along heading or along the block's
+    /// longer side as the [`SplitRule`] says. Each box taken from the queue (best bound
+    /// first) starts a dive: its better child (ties towards the window's centre, the prior
+    /// pose) is split next and the other queued, down to a single pose, so that a good score
+    /// to prune against is found after a few dozen boxes rather than after the best-first
+    /// order has bounded every coarse box (measured on 30 of the `rovernav eval localization`
+    /// cases with inherited bounds: 24.5 lattice poses per evaluation without dives, 31.0 with
+    /// them, 31.6 when the optimum is known in advance). Children start from their parent's
+    /// per-cell bounds. The work is counted in distance-transform lookups divided by the
+    /// number of local cells (a pose scored costs one; a box bound costs the lookups it made
+    /// before it was decided), and the boxes bounded are counted separately.
     pub fn branch_and_bound(
         &mut self,
         threshold: f64,
@@ -957,6 +1309,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         exclude: &[([i32; 3], [i32; 3])],
     ) -> SearchOutcome {
         let half = self.lattice.half;
+        let n = self.cells.len();
         let mut out =
             SearchOutcome { best: None, score: threshold, evaluations: 0, boxes: 0, poses_tested: 0 };
         let lookups_before = self.lookups;
@@ -967,19 +1320,39 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         let root_lo = [-half[0], -half[1], -half[2]];
         let span = (2 * half[0].max(half[1]) + 1) as u32;
         let root_level = 2 * span.next_power_of_two().trailing_zeros();
-        let mut heap = BinaryHeap::new();
+        let mut heap: BinaryHeap<PoseCell> = BinaryHeap::new();
+        // Per-cell bounds of the queued boxes, `n` per slot, and the free slots.
+        let mut store = BoundStore::new(&self.trivial);
+        let mut changes = Vec::new();
+        let mut next: Option<PoseCell> = None;
         if root_lo != half {
             // A bound of +inf: the root is split without a lookup (its bound would not prune).
-            heap.push(PoseCell { lo: root_lo, hi: half, level: root_level, bound: f64::INFINITY });
+            next = Some(PoseCell {
+                lo: root_lo,
+                hi: half,
+                level: root_level,
+                bound: f64::INFINITY,
+                slot: ROOT_SLOT,
+            });
         } else if Some(root_lo) != seed && !exclude.iter().any(|b| inside(root_lo, b)) {
             // A window of one pose.
             out.offer(root_lo, self.score_pose(root_lo));
         }
-        while let Some(cell) = heap.pop() {
-            if cell.bound <= out.score {
-                break;
-            }
-            for child in self.split_cell(&cell).into_iter().flatten() {
+        loop {
+            let cell = match next.take() {
+                Some(cell) if cell.bound > out.score => cell,
+                Some(cell) => {
+                    store.release(cell.slot);
+                    continue;
+                }
+                None => match heap.pop() {
+                    Some(cell) if cell.bound > out.score => cell,
+                    _ => break,
+                },
+            };
+            let mut kept: [Option<PoseCell>; 2] = [None, None];
+            for (entry, child) in kept.iter_mut().zip(self.split_cell(&cell)) {
+                let Some(child) = child else { continue };
                 if exclude.iter().any(|b| (0..3).all(|a| child.lo[a] >= b.0[a] && child.hi[a] <= b.1[a])) {
                     continue;
                 }
@@ -987,21 +1360,47 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 if single && Some(child.lo) == seed {
                     continue;
                 }
-                let bound = self.bound_search_cell(&child, out.score);
+                changes.clear();
+                let bound = self.bound_search_cell(
+                    &child,
+                    out.score - PRUNE_MARGIN,
+                    store.get(cell.slot),
+                    &mut changes,
+                );
                 out.boxes += 1;
                 out.poses_tested += u64::from(single);
-                if bound <= out.score {
-                    continue;
-                }
                 if single {
-                    out.score = bound;
-                    out.best = Some(child.lo);
-                } else {
-                    heap.push(PoseCell { bound, ..child });
+                    // An exact score (or a bound that cannot win): strictly better to win,
+                    // as in the exhaustive search.
+                    if bound > out.score {
+                        out.score = bound;
+                        out.best = Some(child.lo);
+                    }
+                } else if bound > out.score - PRUNE_MARGIN {
+                    let slot = match self.bound_kind {
+                        BoundKind::MinPool => store.keep(cell.slot, &changes),
+                        BoundKind::Distance => NO_SLOT,
+                    };
+                    *entry = Some(PoseCell { bound, slot, ..child });
                 }
             }
+            store.release(cell.slot);
+            // Dive into the better child; queue the other.
+            let [a, b] = kept;
+            let (dive, other) = match (a, b) {
+                (Some(a), Some(b)) => {
+                    let offset = |c: &PoseCell| (0..3).map(|x| (c.lo[x] + c.hi[x]).abs()).sum::<i32>();
+                    let a_first = a.bound > b.bound || (a.bound == b.bound && offset(&a) <= offset(&b));
+                    if a_first { (Some(a), Some(b)) } else { (Some(b), Some(a)) }
+                }
+                (a, b) => (a.or(b), None),
+            };
+            next = dive;
+            if let Some(other) = other {
+                heap.push(other);
+            }
         }
-        out.evaluations = (self.lookups - lookups_before).div_ceil(self.cells.len().max(1) as u64);
+        out.evaluations = (self.lookups - lookups_before).div_ceil(n.max(1) as u64);
         out
     }
 
@@ -1253,6 +1652,149 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// A mixture-like score: the shape of the ML matcher's (see `ml::MixtureLikelihood`).
+    struct Mixture;
+
+    impl DistanceScore for Mixture {
+        fn score(&self, d: f64) -> f64 {
+            let z = d / 0.05;
+            (0.5 * (-0.5 * z * z).exp() + 0.025).ln()
+        }
+    }
+
+    /// Rough ground with rocks, 5 cm cells.
+    fn terrain(x: f64, y: f64) -> f64 {
+        let mut h = 0.02 * (7.0 * x).sin() * (5.0 * y).cos() + 0.01 * (23.0 * x + 17.0 * y).sin();
+        for (cx, cy, r) in [(0.4, 0.3, 0.15), (-0.6, 0.8, 0.2), (1.1, -0.5, 0.12), (0.2, -1.0, 0.25)] {
+            let d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+            h += 2.0 * r * (-d2 / (r * r)).exp();
+        }
+        h
+    }
+
+    /// Boxes bounded from their parent's per-cell bounds (rounded up to f32), with the cell
+    /// subsets and orders the search learnt and the neighbouring-heading hints, early
+    /// termination included, never undercut any pose's exact score in the box, cell by cell
+    /// and in sum: the property that keeps the branch and bound exact. Checked against every
+    /// pose of random boxes of one to three headings, after a search has trained the plans.
+    #[test]
+    fn inherited_and_learnt_bounds_never_undercut_exact_scores() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let r = 0.05;
+        let mut global = Grid2::filled(
+            rovernav_core::GridGeometry { cols: 80, rows: 80, resolution: r, origin_x: -2.0, origin_y: -2.0 },
+            f32::NAN,
+        );
+        for row in 0..80 {
+            for col in 0..80 {
+                let (x, y) = global.geometry.center(col, row);
+                // An unknown patch, so that neutral scores enter the bounds.
+                if !(x > 0.9 && y > 0.9) {
+                    *global.get_mut(col, row) = (terrain(x, y) + rng.random_range(-0.005..0.005)) as f32;
+                }
+            }
+        }
+        let truth = Pose2::new(0.12, -0.08, 0.04);
+        let mut local = Grid2::filled(
+            rovernav_core::GridGeometry { cols: 30, rows: 40, resolution: r, origin_x: 0.0, origin_y: -1.0 },
+            f32::NAN,
+        );
+        for row in 0..40 {
+            for col in 0..30 {
+                let (x, y) = local.geometry.center(col, row);
+                let w = truth.transform(rovernav_core::Point2::new(x, y));
+                if rng.random_bool(0.9) {
+                    *local.get_mut(col, row) = (terrain(w.x, w.y) + rng.random_range(-0.01..0.01)) as f32;
+                }
+            }
+        }
+        let voxels = VoxelMap::new(&global, 5, 1.0, 12).expect("voxels");
+        let cells = LocalCells::new(&local, &voxels, Some(250)).expect("cells");
+        let window =
+            SearchWindow { center: Pose2::new(0.0, 0.0, 0.0), half_x: 0.6, half_y: 0.6, half_yaw: 0.08 };
+        let score = Mixture;
+        let mut scorer =
+            Scorer::new(&voxels, &cells, &score, &window, BoundKind::MinPool, SplitRule::HeadingFirst, 0.05);
+        scorer.use_background_neutral(&[3, 6]);
+        scorer.branch_and_bound(f64::NEG_INFINITY, Some([0, 0, 0]), &[]);
+        let half = scorer.lattice().half;
+        let n = cells.len();
+        let root = BoundStore::new(&scorer.trivial);
+        let mut changes = Vec::new();
+        for trial in 0..60 {
+            let level = rng.random_range(0..6u32);
+            let headings = rng.random_range(1..4);
+            let k_lo = rng.random_range(-half[2]..=half[2] - headings + 1);
+            let k_hi = k_lo + headings - 1;
+            let lo = [rng.random_range(-half[0]..=half[0]), rng.random_range(-half[1]..=half[1]), k_lo];
+            // The parent: the next level's block from the same corner, up to one more heading
+            // on each side, tightened from the trivial bounds and kept as the search keeps it.
+            let (pk_lo, pk_hi) = ((k_lo - rng.random_range(0..2)).max(-half[2]), (k_hi + 1).min(half[2]));
+            changes.clear();
+            scorer.bound_block(
+                lo,
+                level + 1,
+                pk_lo,
+                pk_hi,
+                f64::NEG_INFINITY,
+                root.get(ROOT_SLOT),
+                &mut changes,
+            );
+            let mut store = BoundStore::new(&scorer.trivial);
+            let slot = store.keep(ROOT_SLOT, &changes);
+            let mut exact = vec![0.0; n];
+            let mut best = f64::NEG_INFINITY;
+            let (wx, wy) = block_size(level);
+            let mut poses = Vec::new();
+            for k in k_lo..=k_hi {
+                for j in lo[1]..lo[1] + wy as i32 {
+                    for i in lo[0]..lo[0] + wx as i32 {
+                        poses.push([i, j, k]);
+                    }
+                }
+            }
+            let mut cell_best = vec![f64::NEG_INFINITY; n];
+            for &p in &poses {
+                scorer.for_each_column(p, |c, column| exact[c] = scorer.exact_at(c, column));
+                for (b, e) in cell_best.iter_mut().zip(&exact) {
+                    *b = b.max(*e);
+                }
+                best = best.max(exact.iter().sum());
+            }
+            // Sometimes a threshold near the best, so that the bound stops early.
+            let threshold =
+                if trial % 2 == 0 { f64::NEG_INFINITY } else { best + rng.random_range(-2.0..2.0) };
+            changes.clear();
+            let bound = scorer.bound_block(lo, level, k_lo, k_hi, threshold, store.get(slot), &mut changes);
+            let mut values: Vec<f64> = store.get(slot).values.iter().map(|&v| f64::from(v)).collect();
+            for &(c, b) in &changes {
+                values[c as usize] = b;
+            }
+            assert!(
+                bound >= best - 1e-9,
+                "trial {trial}: level {level} box {lo:?}..{k_hi}: {bound} < {best}"
+            );
+            for c in 0..n {
+                assert!(
+                    values[c] >= cell_best[c] - 1e-9,
+                    "trial {trial}: cell {c}: {} < {}",
+                    values[c],
+                    cell_best[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bounds_kept_as_f32_are_rounded_up() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..10_000 {
+            let v: f64 = rng.random_range(-1e3..1e3);
+            let f = round_up_f32(v);
+            assert!(f64::from(f) >= v && f64::from(f.next_down()) < v, "{v} -> {f}");
+        }
+    }
 
     #[test]
     fn pyramid_levels_are_block_minima_and_unknown_flags() {
