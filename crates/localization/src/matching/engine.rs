@@ -22,11 +22,9 @@
 //!   cell's smallest distance over a block in one lookup, so the bound is the sum of the
 //!   per-cell maxima (never looser than the paper's bound, which stays available as
 //!   [`BoundKind::Distance`]); [`SplitRule::HeadingFirst`] cuts heading before translation,
-//!   because boxes spanning headings pay a voxel-rounding slack. Cells are looked up most
-//!   informative first and a box is dropped as soon as its partial bound falls to the best
-//!   score; cells in layers where nearly every block holds an occupied voxel take the best
-//!   score's bound without a lookup. The work is counted in lookups (see
-//!   [`SearchOutcome::evaluations`]).
+//!   because boxes spanning headings pay a voxel-rounding slack. A box is dropped as soon as
+//!   its partial bound falls to the best score; which cells are looked up, and in what order,
+//!   is below. The work is counted in lookups (see [`SearchOutcome::evaluations`]).
 //! - Per-cell bounds are tight at fine blocks only: at 4 x 8 cells and more, ground cells find
 //!   their height layer somewhere in nearly every block, so coarse boxes rarely prune and the
 //!   work is in bounding the fine ones. Four things cut it (lattice poses per evaluation on
@@ -95,8 +93,8 @@ pub struct VoxelMap {
     unknown_pyramid: Vec<Vec<bool>>,
     /// `nonzero_fraction[t][layer]`: over the known columns, the fraction whose level-`t`
     /// block at that layer holds no occupied voxel (minimum distance above zero). A local cell
-    /// in a layer where this is small nearly always gets the best score's bound at that level,
-    /// so the search bounds it without a lookup (see `Scorer::bound_block`).
+    /// in a layer where this is small nearly always gets the best score's bound at that level:
+    /// the prior order of each level's `CellPlan` looks such cells up last.
     nonzero_fraction: Vec<Vec<f32>>,
     /// Per column: whether the global map has a height there.
     known: Vec<bool>,
@@ -753,8 +751,9 @@ const MAX_STORED_BOUNDS: usize = 1 << 24;
 /// Most cells the neighbouring-heading hints hold at once (32 MB).
 const MAX_HINT_ENTRIES: usize = 1 << 22;
 
-/// A box is pruned when its bound is below the best score by at least this: a hair of slack
-/// against the rounding of sums taken in different orders.
+/// A box is pruned when its bound is below the best score by at least this (or the rounding
+/// error of a sum of the local map's cells, when larger): slack against the rounding of sums
+/// taken in different orders.
 const PRUNE_MARGIN: f64 = 1e-9;
 
 /// What a box bound reads of one local cell, side by side: the bounds visit cells in an
@@ -1119,9 +1118,9 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
     /// trivial bounds without one), which holds for every sub-box, and only the cells of the
     /// level's [`CellPlan`] are looked up, in its order (or, at [`NEIGHBOUR_HINT_LEVELS`], in
     /// the order of the decreases the same block brought at a neighbouring heading, whose
-    /// cells land within a voxel of where they land here). The per-cell bounds are left in
-    /// `values`; the partial sum is a bound too, so the box is dropped as soon as it falls to
-    /// `threshold`.
+    /// cells land within a voxel of where they land here). The per-cell bounds that tightened
+    /// are pushed to `changes`; the partial sum is a bound too, so the box is dropped as soon as
+    /// it falls to `threshold`.
     #[allow(clippy::too_many_arguments)]
     fn bound_block(
         &mut self,
@@ -1313,6 +1312,10 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         let mut out =
             SearchOutcome { best: None, score: threshold, evaluations: 0, boxes: 0, poses_tested: 0 };
         let lookups_before = self.lookups;
+        // A bound sums n per-cell terms in another order than the exact score: each addition
+        // may round by an ulp of the running sum, at most n times the largest term.
+        let largest = self.exact.iter().chain(&self.neutral).fold(0.0f64, |m, v| m.max(v.abs()));
+        let margin = PRUNE_MARGIN.max(4.0 * f64::EPSILON * (n * n) as f64 * largest);
         let inside = |p: [i32; 3], b: &([i32; 3], [i32; 3])| (0..3).all(|a| p[a] >= b.0[a] && p[a] <= b.1[a]);
         if let Some(p) = seed.filter(|p| !exclude.iter().any(|b| inside(*p, b))) {
             out.offer(p, self.score_pose(p));
@@ -1340,13 +1343,13 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         }
         loop {
             let cell = match next.take() {
-                Some(cell) if cell.bound > out.score => cell,
+                Some(cell) if cell.bound > out.score - margin => cell,
                 Some(cell) => {
                     store.release(cell.slot);
                     continue;
                 }
                 None => match heap.pop() {
-                    Some(cell) if cell.bound > out.score => cell,
+                    Some(cell) if cell.bound > out.score - margin => cell,
                     _ => break,
                 },
             };
@@ -1361,12 +1364,8 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                     continue;
                 }
                 changes.clear();
-                let bound = self.bound_search_cell(
-                    &child,
-                    out.score - PRUNE_MARGIN,
-                    store.get(cell.slot),
-                    &mut changes,
-                );
+                let bound =
+                    self.bound_search_cell(&child, out.score - margin, store.get(cell.slot), &mut changes);
                 out.boxes += 1;
                 out.poses_tested += u64::from(single);
                 if single {
@@ -1376,7 +1375,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                         out.score = bound;
                         out.best = Some(child.lo);
                     }
-                } else if bound > out.score - PRUNE_MARGIN {
+                } else if bound > out.score - margin {
                     let slot = match self.bound_kind {
                         BoundKind::MinPool => store.keep(cell.slot, &changes),
                         BoundKind::Distance => NO_SLOT,
