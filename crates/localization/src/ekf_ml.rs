@@ -125,10 +125,20 @@ pub struct EkfMlStats {
     pub clouds_mapped_only: u64,
 }
 
-/// Running mean of heights per world cell (sparse: the map follows the traverse).
+/// Running mean of heights per world cell (sparse: the map follows the traverse), with the
+/// mean squared stereo range error of the points that made it (the map's own error, which
+/// localisation target selection needs).
 #[derive(Clone, Debug, Default)]
 struct WorldElevation {
-    cells: HashMap<(i32, i32), (f32, u16)>,
+    cells: HashMap<(i32, i32), MapCell>,
+}
+
+/// One world cell: sums over the points binned in it.
+#[derive(Clone, Copy, Debug, Default)]
+struct MapCell {
+    height_sum: f32,
+    range_variance_sum: f32,
+    count: u16,
 }
 
 impl WorldElevation {
@@ -140,8 +150,25 @@ impl WorldElevation {
         self.cells.is_empty()
     }
 
-    /// The mean-height grid of a square of `half` metres around `centre` (NaN where unknown).
+    /// The mean heights (NaN where unmapped) of a square world-aligned crop.
     fn crop(&self, centre: Point2, half: f64, resolution: f64) -> Grid2<f32> {
+        self.crop_with(centre, half, resolution, |c| c.height_sum / f32::from(c.count))
+    }
+
+    /// The root-mean-square range error (m) of the points of each cell of a square crop (NaN
+    /// where unmapped). Not divided by the count: the points of one view in one cell share
+    /// their stereo error.
+    fn crop_range_error(&self, centre: Point2, half: f64, resolution: f64) -> Grid2<f32> {
+        self.crop_with(centre, half, resolution, |c| (c.range_variance_sum / f32::from(c.count)).sqrt())
+    }
+
+    fn crop_with(
+        &self,
+        centre: Point2,
+        half: f64,
+        resolution: f64,
+        f: impl Fn(&MapCell) -> f32,
+    ) -> Grid2<f32> {
         let n = (2.0 * half / resolution).ceil() as usize;
         let (c0, r0) = Self::key(centre.x - half, centre.y - half, resolution);
         let geometry = GridGeometry {
@@ -154,22 +181,23 @@ impl WorldElevation {
         let mut grid = Grid2::filled(geometry, f32::NAN);
         for row in 0..n {
             for col in 0..n {
-                if let Some(&(sum, count)) = self.cells.get(&(c0 + col as i32, r0 + row as i32)) {
-                    *grid.get_mut(col, row) = sum / f32::from(count);
+                if let Some(cell) = self.cells.get(&(c0 + col as i32, r0 + row as i32)) {
+                    *grid.get_mut(col, row) = f(cell);
                 }
             }
         }
         grid
     }
 
-    /// Adds world-frame points after removing the median height offset to the map where they
-    /// overlap it (the estimate's height drifts; the matcher needs one vertical datum).
-    fn add(&mut self, points: &[[f64; 3]], resolution: f64) {
+    /// Adds world-frame points `[x, y, z, range variance]` after removing the median height
+    /// offset to the map where they overlap it (the estimate's height drifts; the matcher needs
+    /// one vertical datum).
+    fn add(&mut self, points: &[[f64; 4]], resolution: f64) {
         let mut offsets: Vec<f64> = points
             .iter()
             .filter_map(|p| {
-                let &(sum, count) = self.cells.get(&Self::key(p[0], p[1], resolution))?;
-                Some(p[2] - f64::from(sum / f32::from(count)))
+                let cell = self.cells.get(&Self::key(p[0], p[1], resolution))?;
+                Some(p[2] - f64::from(cell.height_sum / f32::from(cell.count)))
             })
             .collect();
         let shift = if offsets.len() >= 50 {
@@ -179,10 +207,11 @@ impl WorldElevation {
             0.0
         };
         for p in points {
-            let entry = self.cells.entry(Self::key(p[0], p[1], resolution)).or_insert((0.0, 0));
-            if entry.1 < u16::MAX {
-                entry.0 += (p[2] - shift) as f32;
-                entry.1 += 1;
+            let cell = self.cells.entry(Self::key(p[0], p[1], resolution)).or_default();
+            if cell.count < u16::MAX {
+                cell.height_sum += (p[2] - shift) as f32;
+                cell.range_variance_sum += p[3] as f32;
+                cell.count += 1;
             }
         }
     }
@@ -283,7 +312,7 @@ impl EkfMl {
                 max_range: config.mast_range,
                 // The mast stereo's range error model, 0.004 r^2 (the simulator's default mast;
                 // a real rover would use its cameras' calibrated figure).
-                height_noise_at_1m: 0.004,
+                range_noise_at_1m: 0.004,
                 // The prediction matches as the fix will, with as many cells: with a fifth of
                 // them (400) the few rocks of a view over the rover's own smooth track were
                 // mostly dropped and straight back was predicted the worst view while real fixes
@@ -421,21 +450,29 @@ impl EkfMl {
         let pans = [std::f64::consts::PI, std::f64::consts::PI - spread, std::f64::consts::PI + spread];
         let half = self.target_params.max_range + self.target_params.window_xy + 1.0;
         let global = self.map.crop(here.position(), half, self.params.resolution);
-        let best = rank_pans(&global, &here, &pans, &self.target_params)
+        let error = self.map.crop_range_error(here.position(), half, self.params.resolution);
+        let best = rank_pans(&global, Some(&error), &here, &pans, &self.target_params)
             .ok()
             .and_then(|ranked| ranked.first().filter(|c| c.cost.is_finite()).map(|c| c.pan));
         self.target = best.map(|pan| (here, rovernav_core::wrap_angle(pan)));
     }
 
-    /// Places clouds in the world map with the current estimate.
+    /// Places clouds in the world map with the current estimate, each point with the variance
+    /// of its stereo range error (`k r^2` at range r from its camera).
     fn map_clouds(&mut self, clouds: &[PointCloud]) {
         let estimate = self.ekf.estimate();
         let pose = Pose3 { z: 0.0, ..estimate.pose };
-        let points: Vec<[f64; 3]> = clouds
+        let k = self.target_params.range_noise_at_1m;
+        let points: Vec<[f64; 4]> = clouds
             .iter()
-            .flat_map(|c| c.points.iter())
-            .map(|p| pose.transform([f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]))
-            .filter(|w| w.iter().all(|v| v.is_finite()))
+            .flat_map(|c| c.points.iter().map(move |p| (c.origin, p)))
+            .filter_map(|(o, p)| {
+                let body = [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])];
+                let r2 = (body[0] - o[0]).powi(2) + (body[1] - o[1]).powi(2) + (body[2] - o[2]).powi(2);
+                let [x, y, z] = pose.transform(body);
+                let point = [x, y, z, (k * r2).powi(2)];
+                point.iter().all(|v| v.is_finite()).then_some(point)
+            })
             .collect();
         self.map.add(&points, self.params.resolution);
         self.map_covariance = estimate.covariance;
@@ -542,10 +579,10 @@ mod tests {
     #[test]
     fn world_map_removes_the_height_offset_of_overlapping_clouds() {
         let mut map = WorldElevation::default();
-        let flat: Vec<[f64; 3]> =
-            (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0]).collect();
+        let flat: Vec<[f64; 4]> =
+            (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0, 0.0]).collect();
         map.add(&flat, 0.1);
-        let raised: Vec<[f64; 3]> = flat.iter().map(|p| [p[0], p[1], p[2] + 0.3]).collect();
+        let raised: Vec<[f64; 4]> = flat.iter().map(|p| [p[0], p[1], p[2] + 0.3, 0.0]).collect();
         map.add(&raised, 0.1);
         let grid = map.crop(Point2::new(0.5, 0.5), 0.5, 0.1);
         for h in grid.data.iter().filter(|h| h.is_finite()) {

@@ -1,18 +1,24 @@
 //! Localisation target selection (paper 000 section 4.4).
 //!
-//! Before moving, the rover predicts, for each direction the mast could look after the move,
-//! how well the view would localise it: it builds the map it expects to see from the planned
-//! pose (the known cells of the current global map inside the wedge and in line of sight of the
-//! mast) and matches that prediction against the global map around the planned pose. The
-//! sharpness of the likelihood peak (the fitted covariance) and the strength of competing
-//! peaks (failure probability) give the predicted uncertainty; the direction with the lowest
-//! is the localisation target.
+//! Before the look that will localise it, the rover predicts for each direction the mast could
+//! look how well that view would localise it. As in the paper the prediction is a *probability
+//! map* of the terrain expected to be seen from the pose: every cell of the map made so far that
+//! the mast would see (inside the wedge, in line of sight) is expected where the map puts it,
+//! blurred by the two errors that separate the coming view from the map: the map's own (the
+//! stereo range error at the range each cell was mapped from) and the new view's (the range
+//! error at the range it will be seen from). Stereo errors lie along the viewing ray, so the
+//! blur runs along it; each cell becomes three weighted points (a three-point Gauss-Hermite rule
+//! over the combined range error), the weight being the probability that the voxel is seen
+//! occupied. The probability map is then compared with the map by the matcher's own likelihood,
+//! as an expectation over those probabilities, at every pose of a search lattice around the
+//! planned pose. How widely the resulting likelihood spreads around the planned pose (which is
+//! the truth of the prediction) is the predicted uncertainty: a view of rocks mapped from close
+//! by gives a sharp peak; featureless ground, or terrain mapped from afar, a broad one or
+//! competing peaks. The direction with the smallest spread is the localisation target.
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, wrap_angle};
 
+use crate::matching::elevation::{fill_gaps, high_pass, occupied_cells};
 use crate::matching::{MatchError, MlMatcher, MlParams, SearchWindow};
 
 /// How candidate views are generated and compared.
@@ -28,11 +34,12 @@ pub struct TargetParams {
     pub max_range: f64,
     /// Camera height above the ground (m), for line of sight.
     pub mast_height: f64,
-    /// Expected height error of the new view at 1 m (m); it grows with range^2 as stereo's.
-    pub height_noise_at_1m: f64,
+    /// Stereo range error at 1 m (m, one sigma); it grows with range^2.
+    pub range_noise_at_1m: f64,
     /// Half-size of the search window around the planned pose (m).
     pub window_xy: f64,
-    /// Half-size of the heading window (rad).
+    /// Half-size of the heading window (rad). Zero (the default) holds the planned heading:
+    /// views are ranked by position error, and every heading step multiplies the work.
     pub window_yaw: f64,
     /// Matcher parameters.
     pub params: MlParams,
@@ -46,9 +53,9 @@ impl Default for TargetParams {
             min_range: 1.0,
             max_range: 5.0,
             mast_height: 1.2,
-            height_noise_at_1m: 0.002,
+            range_noise_at_1m: 0.004,
             window_xy: 0.25,
-            window_yaw: 0.03,
+            window_yaw: 0.0,
             params: MlParams::default(),
         }
     }
@@ -61,36 +68,50 @@ pub struct TargetCandidate {
     pub pan: f64,
     /// Known, visible cells the view would contain.
     pub cells: usize,
-    /// Predicted position uncertainty: sqrt of the trace of the xy covariance (m).
+    /// Predicted position uncertainty of the likelihood peak at the planned pose: sqrt of the
+    /// trace of the xy covariance of a normal fitted to it (m).
     pub position_sigma: f64,
-    /// Predicted failure probability.
+    /// Predicted failure probability: the likelihood's mass more than one lattice step from
+    /// the planned pose.
     pub failure_probability: f64,
-    /// Combined cost (lower is better): the expected position error (m), the predicted sigma if
-    /// the match holds and the search window's half-diagonal if it fails.
+    /// Combined cost (lower is better): the predicted root-mean-square position error (m), the
+    /// likelihood's spread around the planned pose over the search lattice, with the fitted
+    /// peak's variance below one lattice step (where the lattice cannot resolve it).
     pub cost: f64,
 }
 
-/// The map expected from `pose` looking along body bearing `pan`: known global cells inside the
-/// wedge whose line of sight from the mast clears the terrain, in the rover frame, with the
-/// expected sensing error drawn from a generator seeded by `seed` (the prediction must not be
-/// an exact copy of the global map, or any view, even of featureless ground, would match it).
+/// The terrain the mast is expected to see from a pose.
+#[derive(Clone, Debug)]
+pub struct PredictedView {
+    /// Map heights of the visible cells, rover frame, relative to the ground under the rover
+    /// (NaN elsewhere).
+    pub heights: Grid2<f32>,
+    /// Each visible cell's expected range error (m, one sigma): the map's and the view's.
+    pub range_sigma: Grid2<f32>,
+    /// Height of the mast's eye above the ground under the rover (m).
+    pub eye_height: f64,
+}
+
+/// The view expected from `pose` looking along body bearing `pan`: the known cells of `global`
+/// inside the wedge whose line of sight from the mast clears the terrain. `map_error` holds
+/// each global cell's range error (m, same geometry as `global`); without it, or where it is
+/// unknown, the map is taken to be as good as the coming view.
 pub fn predicted_view(
     global: &Grid2<f32>,
+    map_error: Option<&Grid2<f32>>,
     pose: &Pose2,
     pan: f64,
     params: &TargetParams,
-    seed: u64,
-) -> Grid2<f32> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+) -> PredictedView {
     let r = global.resolution();
     let range = params.max_range;
     let n = (2.0 * range / r).ceil() as usize;
     let geometry = GridGeometry { cols: n, rows: n, resolution: r, origin_x: -range, origin_y: -range };
-    let mut out = Grid2::filled(geometry, f32::NAN);
+    let mut heights = Grid2::filled(geometry, f32::NAN);
+    let mut range_sigma = Grid2::filled(geometry, f32::NAN);
     let height = |p: Point2| global.at_world(p.x, p.y).copied().filter(|h| h.is_finite());
     let Some(ground) = height(pose.position()) else {
-        return out;
+        return PredictedView { heights, range_sigma, eye_height: params.mast_height };
     };
     let eye = f64::from(ground) + params.mast_height;
     for row in 0..n {
@@ -113,12 +134,139 @@ pub fn predicted_view(
                 height(p).is_none_or(|g| f64::from(g) <= ray + 1e-3)
             });
             if visible {
-                let noise = params.height_noise_at_1m * d * d * unit.sample(&mut rng);
-                *out.get_mut(col, row) = (f64::from(h - ground) + noise) as f32;
+                let rise = f64::from(h) - eye;
+                let view_sigma = params.range_noise_at_1m * (d * d + rise * rise);
+                let map_sigma = map_error
+                    .and_then(|e| e.at_world(target.x, target.y).copied())
+                    .map(f64::from)
+                    .filter(|s| s.is_finite())
+                    .unwrap_or(view_sigma);
+                *heights.get_mut(col, row) = (f64::from(h) - f64::from(ground)) as f32;
+                *range_sigma.get_mut(col, row) = view_sigma.hypot(map_sigma) as f32;
+            }
+        }
+    }
+    PredictedView { heights, range_sigma, eye_height: params.mast_height }
+}
+
+/// The probability map of a predicted view as the matcher sees it: the view filtered as a
+/// local map is (gap filling, high pass), subsampled to the matcher's cell budget, and each
+/// cell spread over the voxels its range error may put it in, as points `[x, y, z,
+/// probability]`. Along the ray the error moves a cell both across the ground and up or down;
+/// the two parts are taken as independent: across the ground by a three-point Gauss-Hermite
+/// rule (nodes 0 and +-sqrt(3) sigma), up and down exactly over the height layers (a node rule
+/// there would keep the map's own layer pattern at full weight and predict a sharp peak on
+/// featureless ground, whose cells straddle a layer edge).
+pub fn probability_points(view: &PredictedView, target: &TargetParams) -> Vec<[f64; 4]> {
+    const RULE: [(f64, f64); 3] =
+        [(0.0, 2.0 / 3.0), (-1.732_050_807_568_877_2, 1.0 / 6.0), (1.732_050_807_568_877_2, 1.0 / 6.0)];
+    // Layers of smaller probability are left out: they change the expectation by less than
+    // the quadrature does.
+    const MIN_PROBABILITY: f64 = 1e-3;
+    let params = &target.params;
+    let layer = view.heights.resolution() / params.vertical_exaggeration;
+    let filled = fill_gaps(&view.heights, params.fill_gaps_cells);
+    let filtered = match params.high_pass_window {
+        Some(w) => high_pass(&filled, w),
+        None => filled.clone(),
+    };
+    let mut cells = occupied_cells(&filtered);
+    if let Some(max) = params.max_local_cells.filter(|&m| m > 0 && cells.len() > m) {
+        // The same even subsample the matcher takes of a real view.
+        let stride = cells.len() as f64 / max as f64;
+        cells = (0..max).map(|i| cells[(i as f64 * stride) as usize]).collect();
+    }
+    let cdf = |v: f64| 0.5 * (1.0 + libm::erf(v * std::f64::consts::FRAC_1_SQRT_2));
+    let mut out = Vec::with_capacity(12 * cells.len());
+    for [x, y, z] in cells {
+        let Some(h) = filled.at_world(x, y).copied().map(f64::from) else {
+            continue;
+        };
+        let rise = h - view.eye_height;
+        let ground = x.hypot(y);
+        let length = ground.hypot(rise);
+        if ground <= 0.0 {
+            continue;
+        }
+        // Cells filled between measurements have no sigma of their own: the view's, and a map
+        // as good.
+        let sigma = view
+            .range_sigma
+            .at_world(x, y)
+            .copied()
+            .map(f64::from)
+            .filter(|s| s.is_finite())
+            .unwrap_or(std::f64::consts::SQRT_2 * target.range_noise_at_1m * length * length);
+        let sigma_ground = sigma * ground / length;
+        let sigma_up = sigma * rise.abs() / length;
+        let (lo, hi) = if sigma_up > 1e-9 {
+            (((z - 3.0 * sigma_up) / layer).floor() as i64, ((z + 3.0 * sigma_up) / layer).floor() as i64)
+        } else {
+            let k = (z / layer).floor() as i64;
+            (k, k)
+        };
+        for k in lo..=hi {
+            let p = if lo == hi {
+                1.0
+            } else {
+                let (bottom, top) = (k as f64 * layer, (k + 1) as f64 * layer);
+                cdf((top - z) / sigma_up) - cdf((bottom - z) / sigma_up)
+            };
+            if p < MIN_PROBABILITY {
+                continue;
+            }
+            let centre = (k as f64 + 0.5) * layer;
+            for (node, weight) in RULE {
+                let shift = node * sigma_ground / ground;
+                out.push([x + shift * x, y + shift * y, centre, weight * p]);
             }
         }
     }
     out
+}
+
+/// Predicts how well a probability map would localise the rover at `window.center` (the
+/// planned pose, the prediction's truth): its expected log-likelihood over the window's pose
+/// lattice, turned into a distribution over poses at the matcher's temperature.
+pub fn predict_uncertainty(
+    matcher: &MlMatcher,
+    points: &[[f64; 4]],
+    window: &SearchWindow,
+) -> Result<(f64, f64, f64), MatchError> {
+    let (lattice, scores) = matcher.expected_log_likelihoods(points, window)?;
+    let [hx, hy, hk] = lattice.half;
+    let (nx, ny) = (2 * hx + 1, 2 * hy + 1);
+    let index = |i: i32, j: i32, k: i32| (((k + hk) * ny + j + hy) * nx + i + hx) as usize;
+    let t = matcher.params().temperature;
+    let best = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (mut mass, mut squared, mut far) = (0.0, 0.0, 0.0);
+    for k in -hk..=hk {
+        for j in -hy..=hy {
+            for i in -hx..=hx {
+                let p = ((scores[index(i, j, k)] - best) / t).exp();
+                mass += p;
+                squared += p * f64::from(i * i + j * j);
+                if i.abs().max(j.abs()) > 1 {
+                    far += p;
+                }
+            }
+        }
+    }
+    let step = lattice.step;
+    let spread = squared / mass * step * step;
+    // Variance of a normal fitted to the peak along each axis (log-likelihood curvature at the
+    // planned pose); a flat or concave axis counts as one step^2.
+    let fitted = |di: i32, dj: i32, half: i32| {
+        if half == 0 {
+            return step * step;
+        }
+        let c = 2.0 * scores[index(0, 0, 0)] - scores[index(di, dj, 0)] - scores[index(-di, -dj, 0)];
+        if c > 0.0 { (t * step * step / c).min(1e6) } else { step * step }
+    };
+    let (vx, vy) = (fitted(1, 0, hx), fitted(0, 1, hy));
+    let sigma = (vx + vy).sqrt();
+    let cost = (spread + vx.min(step * step) + vy.min(step * step)).sqrt();
+    Ok((sigma, far / mass, cost))
 }
 
 /// Ranks the candidate pan angles for localising at `next_pose` against `global` (best first).
@@ -130,13 +278,15 @@ pub fn rank_targets(
     let count = params.candidates.max(1);
     let pans: Vec<f64> =
         (0..count).map(|i| wrap_angle(i as f64 * std::f64::consts::TAU / count as f64)).collect();
-    rank_pans(global, next_pose, &pans, params)
+    rank_pans(global, None, next_pose, &pans, params)
 }
 
 /// Ranks the given pan angles (body frame, rad) for localising at `next_pose` against
-/// `global` (best first).
+/// `global` (best first); `map_error` is each global cell's range error (see
+/// [`predicted_view`]).
 pub fn rank_pans(
     global: &Grid2<f32>,
+    map_error: Option<&Grid2<f32>>,
     next_pose: &Pose2,
     pans: &[f64],
     params: &TargetParams,
@@ -149,24 +299,13 @@ pub fn rank_pans(
         half_yaw: params.window_yaw,
     };
     let mut out = Vec::with_capacity(pans.len());
-    for (i, &pan) in pans.iter().enumerate() {
-        let view = predicted_view(global, next_pose, pan, params, i as u64);
-        let cells = view.data.iter().filter(|h| h.is_finite()).count();
-        let candidate = match matcher.match_detailed(&view, &window, false) {
-            Ok(d) => {
-                let c = d.result.covariance;
-                let sigma = (c[0][0] + c[1][1]).max(0.0).sqrt();
-                let p = d.result.failure_probability;
-                TargetCandidate {
-                    pan,
-                    cells,
-                    position_sigma: sigma,
-                    failure_probability: p,
-                    // A failed match lands anywhere in the window: an error of the order of
-                    // its half-diagonal. (Dividing the sigma by 1 - p instead let a featureless
-                    // view with a one-in-four failure risk beat a rocky one.)
-                    cost: (1.0 - p) * sigma + p * params.window_xy * std::f64::consts::SQRT_2,
-                }
+    for &pan in pans {
+        let view = predicted_view(global, map_error, next_pose, pan, params);
+        let cells = view.heights.data.iter().filter(|h| h.is_finite()).count();
+        let points = probability_points(&view, params);
+        let candidate = match predict_uncertainty(&matcher, &points, &window) {
+            Ok((position_sigma, failure_probability, cost)) => {
+                TargetCandidate { pan, cells, position_sigma, failure_probability, cost }
             }
             Err(MatchError::EmptyMap { .. }) => TargetCandidate {
                 pan,
@@ -200,6 +339,11 @@ mod tests {
 
     /// Flat ground with faint noise everywhere, and rocks only in one sector.
     fn terrain_with_rocky_sector(sector_bearing: f64) -> Grid2<f32> {
+        terrain_with_rocky_sectors(&[sector_bearing])
+    }
+
+    /// Flat ground with faint noise everywhere, and rocks only in the given sectors.
+    fn terrain_with_rocky_sectors(sector_bearings: &[f64]) -> Grid2<f32> {
         let geometry =
             GridGeometry { cols: 240, rows: 240, resolution: 0.05, origin_x: -6.0, origin_y: -6.0 };
         let mut rng = ChaCha8Rng::seed_from_u64(4);
@@ -207,7 +351,8 @@ mod tests {
         for h in &mut g.data {
             *h = rng.random_range(-0.003..0.003);
         }
-        for _ in 0..40 {
+        for _ in 0..40 * sector_bearings.len() {
+            let sector_bearing = sector_bearings[rng.random_range(0..sector_bearings.len())];
             let bearing = sector_bearing + rng.random_range(-0.4..0.4);
             let d = rng.random_range(1.5..4.5);
             let (cx, cy) = (d * bearing.cos(), d * bearing.sin());
@@ -230,7 +375,12 @@ mod tests {
         // Rocks to the north; the rover will face east, so the mast should pan left (+pi/2).
         let global = terrain_with_rocky_sector(std::f64::consts::FRAC_PI_2);
         let next = Pose2::new(0.0, 0.0, 0.0);
-        let ranked = rank_targets(&global, &next, &TargetParams::default()).expect("ranking");
+        // The localiser's cell budget (as in its fixes).
+        let params = TargetParams {
+            params: MlParams { max_local_cells: Some(2000), ..Default::default() },
+            ..Default::default()
+        };
+        let ranked = rank_targets(&global, &next, &params).expect("ranking");
         let best = ranked[0];
         assert!(wrap_angle(best.pan - std::f64::consts::FRAC_PI_2).abs() < 0.4, "picked {best:?}");
         // Looking at featureless ground predicts a worse (or failed) localisation.
@@ -250,7 +400,7 @@ mod tests {
         let global = terrain_with_rocky_sector(rocks);
         let pi = std::f64::consts::PI;
         let pans = [pi, pi - std::f64::consts::FRAC_PI_4, pi + std::f64::consts::FRAC_PI_4];
-        let ranked = rank_pans(&global, &rover, &pans, &TargetParams::default()).expect("ranking");
+        let ranked = rank_pans(&global, None, &rover, &pans, &TargetParams::default()).expect("ranking");
         assert_eq!(ranked.len(), 3);
         let facing = wrap_angle(rocks - rover.yaw);
         assert!(
@@ -259,6 +409,35 @@ mod tests {
             ranked[0]
         );
         assert!(ranked[1].cost >= ranked[0].cost && ranked[2].cost >= ranked[1].cost);
+    }
+
+    #[test]
+    fn prefers_rocks_mapped_from_close_range_to_rocks_mapped_from_afar() {
+        // Rocks to the left and to the right of a rover facing east; the map of one side was
+        // made from close by (1 cm range error), of the other from afar (8 cm): the view of
+        // the well-mapped side must be chosen, whichever side it is.
+        let global = terrain_with_rocky_sectors(&[std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2]);
+        let params = TargetParams {
+            params: MlParams { max_local_cells: Some(2000), ..Default::default() },
+            ..Default::default()
+        };
+        let next = Pose2::new(0.0, 0.0, 0.0);
+        let pans = [std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2];
+        for well_mapped_left in [true, false] {
+            let mut error = Grid2::filled(global.geometry, 0.01f32);
+            for row in 0..error.rows() {
+                for col in 0..error.cols() {
+                    let (_, y) = error.geometry.center(col, row);
+                    if (y > 0.0) != well_mapped_left {
+                        *error.get_mut(col, row) = 0.08;
+                    }
+                }
+            }
+            let ranked = rank_pans(&global, Some(&error), &next, &pans, &params).expect("ranking");
+            let expected = if well_mapped_left { pans[0] } else { pans[1] };
+            assert!((ranked[0].pan - expected).abs() < 1e-9, "{ranked:?}");
+            assert!(ranked[1].cost > ranked[0].cost);
+        }
     }
 
     #[test]
@@ -272,9 +451,9 @@ mod tests {
                 *g.get_mut(col, row) = 2.0;
             }
         }
-        let params = TargetParams { height_noise_at_1m: 0.0, ..Default::default() };
-        let view = predicted_view(&g, &Pose2::new(0.0, 0.0, 0.0), 0.0, &params, 0);
-        let known = |x: f64, y: f64| view.at_world(x, y).is_some_and(|h| h.is_finite());
+        let params = TargetParams::default();
+        let view = predicted_view(&g, None, &Pose2::new(0.0, 0.0, 0.0), 0.0, &params);
+        let known = |x: f64, y: f64| view.heights.at_world(x, y).is_some_and(|h| h.is_finite());
         assert!(known(1.5, 0.0));
         assert!(known(2.02, 0.0));
         assert!(!known(3.5, 0.0));

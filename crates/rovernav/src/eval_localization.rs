@@ -34,10 +34,13 @@ pub struct EvalLocalizationArgs {
     /// Print the figures as JSON.
     #[arg(long)]
     json: bool,
-    /// Closed-loop seeds 1..=N (the protocol: 20 seeds of a 200 m traverse, about
-    /// 3 min of CPU per seed with both localisers in release).
+    /// Number of closed-loop seeds, from `--first-seed` on (the protocol: seeds 1..=20
+    /// of a 200 m traverse, about 3 min of CPU per seed with both localisers in release).
     #[arg(long, default_value_t = 20)]
     seeds: u64,
+    /// First closed-loop seed.
+    #[arg(long, default_value_t = 1)]
+    first_seed: u64,
     /// Closed-loop traverse length (m, straight line from start to goal).
     #[arg(long, default_value_t = 200.0)]
     length: f64,
@@ -82,6 +85,8 @@ pub struct LoopResult {
     pub rejected_on_edge: u64,
     /// Whether the navigator reached the goal.
     pub reached: bool,
+    /// How the navigator ended the traverse (`None`: the step or time limit ran out first).
+    pub outcome: Option<rovernav_core::Outcome>,
 }
 
 /// A long procedural yard with a start at its west end and a goal `length` metres east.
@@ -116,6 +121,7 @@ pub fn drive<L: Localizer>(
     let mut frame = sim.initial_frame();
     localizer.update(&frame);
     let mut reached = false;
+    let mut finished = None;
     for _ in 0..20_000 {
         let input = NavInput {
             time: sim.time(),
@@ -127,6 +133,7 @@ pub fn drive<L: Localizer>(
         let command = nav.step(&input);
         if let NavCommand::Finish(outcome, _) = &command {
             reached = matches!(outcome, rovernav_core::Outcome::Reached);
+            finished = Some(*outcome);
             break;
         }
         frame = sim.execute(&command);
@@ -151,6 +158,7 @@ pub fn drive<L: Localizer>(
             error_m: ex.hypot(ey),
             nees,
             reached,
+            outcome: finished,
             ..Default::default()
         },
         localizer,
@@ -228,7 +236,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
     let sequence_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let next = AtomicU64::new(1);
+    let next = AtomicU64::new(args.first_seed);
     let results: Mutex<Vec<(u64, LoopResult, LoopResult)>> = Mutex::new(Vec::new());
     let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
     std::thread::scope(|s| {
@@ -236,7 +244,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
             s.spawn(|| {
                 loop {
                     let seed = next.fetch_add(1, Ordering::SeqCst);
-                    if seed > args.seeds {
+                    if seed >= args.first_seed.saturating_add(args.seeds) {
                         break;
                     }
                     match closed_loop_seed(
@@ -280,6 +288,7 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
                 "seed": seed,
                 "distance_m": ml.distance_m,
                 "reached": ml.reached,
+                "outcome": ml.outcome.map_or("limit", |o| o.as_str()),
                 "err_pct": 100.0 * ml.error_m / ml.distance_m.max(1e-9),
                 "dead_reckoning_err_pct": 100.0 * dr.error_m / dr.distance_m.max(1e-9),
                 "nees": ml.nees,
