@@ -23,14 +23,14 @@
 use std::collections::HashMap;
 
 use rovernav_core::{
-    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose2, Pose3, PoseEstimate,
-    RoverConfig, SensorFrame,
+    CameraKind, Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose2, Pose3,
+    PoseEstimate, RoverConfig, SensorFrame,
 };
 
 use crate::ekf::{Ekf, EkfParams};
 use crate::matching::elevation::bin_points;
 use crate::matching::{MatchResult, MlMatcher, MlParams, SearchWindow};
-use crate::target::{TargetParams, rank_pans};
+use crate::target::{MapError, RangeNoise, TargetParams, rank_pans};
 
 /// Parameters of the map-matching localiser.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,6 +75,13 @@ pub struct EkfMlParams {
     /// Localisation targets are chosen among the pans `PI` and `PI +- target_spread` (rad):
     /// views back over the terrain just crossed.
     pub target_spread: f64,
+    /// Range error of the mast stereo (the map's own error, for localisation targets; the
+    /// sensors' calibrated figures, here the simulator's defaults).
+    pub mast_range_noise: RangeNoise,
+    /// Range error of the body stereo pairs.
+    pub body_range_noise: RangeNoise,
+    /// Range error of the LIDAR.
+    pub lidar_range_noise: RangeNoise,
     /// Matcher parameters.
     pub matcher: MlParams,
 }
@@ -98,6 +105,9 @@ impl Default for EkfMlParams {
             min_local_cells: 300,
             select_targets: false,
             target_spread: std::f64::consts::FRAC_PI_4,
+            mast_range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
+            body_range_noise: RangeNoise { constant: 0.0, quadratic: 0.01 },
+            lidar_range_noise: RangeNoise { constant: 0.015, quadratic: 0.0 },
             matcher: MlParams {
                 max_local_cells: Some(2000),
                 vertical_exaggeration: 3.0,
@@ -126,7 +136,8 @@ pub struct EkfMlStats {
 }
 
 /// Running mean of heights per world cell (sparse: the map follows the traverse), with the
-/// mean squared stereo range error of the points that made it (the map's own error, which
+/// mean squared range error of the points that made it, split into its vertical and its
+/// across-the-ground parts along each point's own viewing ray (the map's own error, which
 /// localisation target selection needs).
 #[derive(Clone, Debug, Default)]
 struct WorldElevation {
@@ -137,7 +148,8 @@ struct WorldElevation {
 #[derive(Clone, Copy, Debug, Default)]
 struct MapCell {
     height_sum: f32,
-    range_variance_sum: f32,
+    vertical_variance_sum: f32,
+    ground_variance_sum: f32,
     count: u16,
 }
 
@@ -155,11 +167,16 @@ impl WorldElevation {
         self.crop_with(centre, half, resolution, |c| c.height_sum / f32::from(c.count))
     }
 
-    /// The root-mean-square range error (m) of the points of each cell of a square crop (NaN
-    /// where unmapped). Not divided by the count: the points of one view in one cell share
-    /// their stereo error.
-    fn crop_range_error(&self, centre: Point2, half: f64, resolution: f64) -> Grid2<f32> {
-        self.crop_with(centre, half, resolution, |c| (c.range_variance_sum / f32::from(c.count)).sqrt())
+    /// The vertical and the across-the-ground root-mean-square range errors (m) of the points
+    /// of each cell of a square crop (NaN where unmapped). An RMS, not shrunk as the standard
+    /// error of a mean of the count: the points of one view in one cell share their stereo
+    /// error.
+    fn crop_error(&self, centre: Point2, half: f64, resolution: f64) -> MapError {
+        let rms = |sum: f32, count: u16| (sum / f32::from(count)).sqrt();
+        MapError {
+            vertical: self.crop_with(centre, half, resolution, |c| rms(c.vertical_variance_sum, c.count)),
+            ground: self.crop_with(centre, half, resolution, |c| rms(c.ground_variance_sum, c.count)),
+        }
     }
 
     fn crop_with(
@@ -189,10 +206,10 @@ impl WorldElevation {
         grid
     }
 
-    /// Adds world-frame points `[x, y, z, range variance]` after removing the median height
-    /// offset to the map where they overlap it (the estimate's height drifts; the matcher needs
-    /// one vertical datum).
-    fn add(&mut self, points: &[[f64; 4]], resolution: f64) {
+    /// Adds world-frame points `[x, y, z, vertical variance, across-ground variance]` of their
+    /// range error after removing the median height offset to the map where they overlap it
+    /// (the estimate's height drifts; the matcher needs one vertical datum).
+    fn add(&mut self, points: &[[f64; 5]], resolution: f64) {
         let mut offsets: Vec<f64> = points
             .iter()
             .filter_map(|p| {
@@ -210,7 +227,8 @@ impl WorldElevation {
             let cell = self.cells.entry(Self::key(p[0], p[1], resolution)).or_default();
             if cell.count < u16::MAX {
                 cell.height_sum += (p[2] - shift) as f32;
-                cell.range_variance_sum += p[3] as f32;
+                cell.vertical_variance_sum += p[3] as f32;
+                cell.ground_variance_sum += p[4] as f32;
                 cell.count += 1;
             }
         }
@@ -310,15 +328,11 @@ impl EkfMl {
                 fov: config.mast_fov,
                 mast_height: config.mast_height,
                 max_range: config.mast_range,
-                // The mast stereo's range error model, 0.004 r^2 (the simulator's default mast;
-                // a real rover would use its cameras' calibrated figure).
-                range_noise_at_1m: 0.004,
-                // The prediction matches as the fix will, with as many cells: with a fifth of
-                // them (400) the few rocks of a view over the rover's own smooth track were
-                // mostly dropped and straight back was predicted the worst view while real fixes
-                // there were the best (closed loop with targets: 1.16 % of distance on 20
-                // seeds; with the fix's budget 0.91 % on seeds 1-4, 0.31 % without seed 2,
-                // which stops after 17 m).
+                range_noise: params.mast_range_noise,
+                // The prediction scores as many cells as the fix will: with a fifth of them
+                // (400) the few rocks of a view over the rover's own smooth track were mostly
+                // dropped and straight back was predicted the worst view while real fixes there
+                // were the best.
                 params: params.matcher,
                 ..Default::default()
             },
@@ -450,7 +464,7 @@ impl EkfMl {
         let pans = [std::f64::consts::PI, std::f64::consts::PI - spread, std::f64::consts::PI + spread];
         let half = self.target_params.max_range + self.target_params.window_xy + 1.0;
         let global = self.map.crop(here.position(), half, self.params.resolution);
-        let error = self.map.crop_range_error(here.position(), half, self.params.resolution);
+        let error = self.map.crop_error(here.position(), half, self.params.resolution);
         let best = rank_pans(&global, Some(&error), &here, &pans, &self.target_params)
             .ok()
             .and_then(|ranked| ranked.first().filter(|c| c.cost.is_finite()).map(|c| c.pan));
@@ -458,19 +472,30 @@ impl EkfMl {
     }
 
     /// Places clouds in the world map with the current estimate, each point with the variance
-    /// of its stereo range error (`k r^2` at range r from its camera).
+    /// of its range error (from its sensor's noise model at its range) split along its ray into
+    /// the vertical and the across-the-ground parts.
     fn map_clouds(&mut self, clouds: &[PointCloud]) {
         let estimate = self.ekf.estimate();
         let pose = Pose3 { z: 0.0, ..estimate.pose };
-        let k = self.target_params.range_noise_at_1m;
-        let points: Vec<[f64; 4]> = clouds
+        let p = &self.params;
+        let points: Vec<[f64; 5]> = clouds
             .iter()
-            .flat_map(|c| c.points.iter().map(move |p| (c.origin, p)))
-            .filter_map(|(o, p)| {
-                let body = [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])];
-                let r2 = (body[0] - o[0]).powi(2) + (body[1] - o[1]).powi(2) + (body[2] - o[2]).powi(2);
+            .flat_map(|c| {
+                let noise = match c.camera {
+                    CameraKind::Mast => p.mast_range_noise,
+                    CameraKind::BodyFront | CameraKind::BodyRear => p.body_range_noise,
+                    CameraKind::Lidar => p.lidar_range_noise,
+                };
+                c.points.iter().map(move |q| (c.origin, noise, q))
+            })
+            .filter_map(|(o, noise, q)| {
+                let body = [f64::from(q[0]), f64::from(q[1]), f64::from(q[2])];
+                let (dx, dy, dz) = (body[0] - o[0], body[1] - o[1], body[2] - o[2]);
+                let r2 = dx * dx + dy * dy + dz * dz;
+                let variance = noise.sigma(r2.sqrt()).powi(2);
+                let up = if r2 > 0.0 { dz * dz / r2 } else { 1.0 };
                 let [x, y, z] = pose.transform(body);
-                let point = [x, y, z, (k * r2).powi(2)];
+                let point = [x, y, z, variance * up, variance * (1.0 - up)];
                 point.iter().all(|v| v.is_finite()).then_some(point)
             })
             .collect();
@@ -579,10 +604,10 @@ mod tests {
     #[test]
     fn world_map_removes_the_height_offset_of_overlapping_clouds() {
         let mut map = WorldElevation::default();
-        let flat: Vec<[f64; 4]> =
-            (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0, 0.0]).collect();
+        let flat: Vec<[f64; 5]> =
+            (0..100).map(|i| [f64::from(i % 10) * 0.1, f64::from(i / 10) * 0.1, 1.0, 0.0, 0.0]).collect();
         map.add(&flat, 0.1);
-        let raised: Vec<[f64; 4]> = flat.iter().map(|p| [p[0], p[1], p[2] + 0.3, 0.0]).collect();
+        let raised: Vec<[f64; 5]> = flat.iter().map(|p| [p[0], p[1], p[2] + 0.3, 0.0, 0.0]).collect();
         map.add(&raised, 0.1);
         let grid = map.crop(Point2::new(0.5, 0.5), 0.5, 0.1);
         for h in grid.data.iter().filter(|h| h.is_finite()) {

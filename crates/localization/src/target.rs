@@ -5,11 +5,13 @@
 //! map* of the terrain expected to be seen from the pose: every cell of the map made so far that
 //! the mast would see (inside the wedge, in line of sight) is expected where the map puts it,
 //! blurred by the two errors that separate the coming view from the map: the map's own (the
-//! stereo range error at the range each cell was mapped from) and the new view's (the range
-//! error at the range it will be seen from). Stereo errors lie along the viewing ray, so the
-//! blur runs along it; each cell becomes three weighted points (a three-point Gauss-Hermite rule
-//! over the combined range error), the weight being the probability that the voxel is seen
-//! occupied. The probability map is then compared with the map by the matcher's own likelihood,
+//! range error of the points that made each cell, at the range and along the ray they were
+//! mapped from) and the new view's (the range error at the range it will be seen from, along
+//! the new ray). Each error splits into a vertical part and a part across the ground; each
+//! cell becomes weighted points over the height layers it may be seen in (exact normal
+//! probabilities per layer) times a three-point Gauss-Hermite rule across the ground, the
+//! weight being the probability that the voxel is seen occupied (see [`probability_points`]).
+//! The probability map is then compared with the map by the matcher's own likelihood,
 //! as an expectation over those probabilities, at every pose of a search lattice around the
 //! planned pose. How widely the resulting likelihood spreads around the planned pose (which is
 //! the truth of the prediction) is the predicted uncertainty: a view of rocks mapped from close
@@ -20,6 +22,32 @@ use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, wrap_angle};
 
 use crate::matching::elevation::{fill_gaps, high_pass, occupied_cells};
 use crate::matching::{MatchError, MlMatcher, MlParams, SearchWindow};
+
+/// A range sensor's error model: one sigma `constant + quadratic r^2` at range r (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RangeNoise {
+    /// Range-independent part (m).
+    pub constant: f64,
+    /// Coefficient of the squared range (1/m): stereo's disparity error.
+    pub quadratic: f64,
+}
+
+impl RangeNoise {
+    /// The range error's sigma at range `r` (m).
+    pub fn sigma(&self, r: f64) -> f64 {
+        self.constant + self.quadratic * r * r
+    }
+}
+
+/// The map's own error per cell (m, one sigma; NaN where unknown), on the map's geometry.
+#[derive(Clone, Debug)]
+pub struct MapError {
+    /// Vertical part.
+    pub vertical: Grid2<f32>,
+    /// Part across the ground (applied along the new view's ray: the mapping ray's bearing is
+    /// not kept).
+    pub ground: Grid2<f32>,
+}
 
 /// How candidate views are generated and compared.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,8 +62,8 @@ pub struct TargetParams {
     pub max_range: f64,
     /// Camera height above the ground (m), for line of sight.
     pub mast_height: f64,
-    /// Stereo range error at 1 m (m, one sigma); it grows with range^2.
-    pub range_noise_at_1m: f64,
+    /// Range error of the mast's view.
+    pub range_noise: RangeNoise,
     /// Half-size of the search window around the planned pose (m).
     pub window_xy: f64,
     /// Half-size of the heading window (rad). Zero (the default) holds the planned heading:
@@ -53,7 +81,7 @@ impl Default for TargetParams {
             min_range: 1.0,
             max_range: 5.0,
             mast_height: 1.2,
-            range_noise_at_1m: 0.004,
+            range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
             window_xy: 0.25,
             window_yaw: 0.0,
             params: MlParams::default(),
@@ -69,7 +97,8 @@ pub struct TargetCandidate {
     /// Known, visible cells the view would contain.
     pub cells: usize,
     /// Predicted position uncertainty of the likelihood peak at the planned pose: sqrt of the
-    /// trace of the xy covariance of a normal fitted to it (m).
+    /// trace of the xy covariance of a normal fitted to it (m); a flat axis counts the search
+    /// window's half-width.
     pub position_sigma: f64,
     /// Predicted failure probability: the likelihood's mass more than one lattice step from
     /// the planned pose.
@@ -86,19 +115,23 @@ pub struct PredictedView {
     /// Map heights of the visible cells, rover frame, relative to the ground under the rover
     /// (NaN elsewhere).
     pub heights: Grid2<f32>,
-    /// Each visible cell's expected range error (m, one sigma): the map's and the view's.
-    pub range_sigma: Grid2<f32>,
+    /// Each visible cell's expected vertical error (m, one sigma): the map's and the view's.
+    pub sigma_up: Grid2<f32>,
+    /// Each visible cell's expected error across the ground, along the ray (m, one sigma).
+    pub sigma_ground: Grid2<f32>,
     /// Height of the mast's eye above the ground under the rover (m).
     pub eye_height: f64,
+    /// The view's range error model (for cells the matcher's gap filling adds).
+    pub range_noise: RangeNoise,
 }
 
 /// The view expected from `pose` looking along body bearing `pan`: the known cells of `global`
-/// inside the wedge whose line of sight from the mast clears the terrain. `map_error` holds
-/// each global cell's range error (m, same geometry as `global`); without it, or where it is
-/// unknown, the map is taken to be as good as the coming view.
+/// inside the wedge whose line of sight from the mast clears the terrain. `map_error` is on
+/// `global`'s geometry; without it, or where it is unknown, the map is taken to be as good as
+/// the coming view.
 pub fn predicted_view(
     global: &Grid2<f32>,
-    map_error: Option<&Grid2<f32>>,
+    map_error: Option<&MapError>,
     pose: &Pose2,
     pan: f64,
     params: &TargetParams,
@@ -107,11 +140,16 @@ pub fn predicted_view(
     let range = params.max_range;
     let n = (2.0 * range / r).ceil() as usize;
     let geometry = GridGeometry { cols: n, rows: n, resolution: r, origin_x: -range, origin_y: -range };
-    let mut heights = Grid2::filled(geometry, f32::NAN);
-    let mut range_sigma = Grid2::filled(geometry, f32::NAN);
+    let mut view = PredictedView {
+        heights: Grid2::filled(geometry, f32::NAN),
+        sigma_up: Grid2::filled(geometry, f32::NAN),
+        sigma_ground: Grid2::filled(geometry, f32::NAN),
+        eye_height: params.mast_height,
+        range_noise: params.range_noise,
+    };
     let height = |p: Point2| global.at_world(p.x, p.y).copied().filter(|h| h.is_finite());
     let Some(ground) = height(pose.position()) else {
-        return PredictedView { heights, range_sigma, eye_height: params.mast_height };
+        return view;
     };
     let eye = f64::from(ground) + params.mast_height;
     for row in 0..n {
@@ -135,34 +173,40 @@ pub fn predicted_view(
             });
             if visible {
                 let rise = f64::from(h) - eye;
-                let view_sigma = params.range_noise_at_1m * (d * d + rise * rise);
-                let map_sigma = map_error
-                    .and_then(|e| e.at_world(target.x, target.y).copied())
-                    .map(f64::from)
-                    .filter(|s| s.is_finite())
-                    .unwrap_or(view_sigma);
-                *heights.get_mut(col, row) = (f64::from(h) - f64::from(ground)) as f32;
-                *range_sigma.get_mut(col, row) = view_sigma.hypot(map_sigma) as f32;
+                let r = d.hypot(rise);
+                let sigma = params.range_noise.sigma(r);
+                let (view_up, view_ground) = (sigma * rise.abs() / r, sigma * d / r);
+                let map = |grid: &Grid2<f32>| {
+                    grid.at_world(target.x, target.y).copied().map(f64::from).filter(|s| s.is_finite())
+                };
+                let map_up = map_error.and_then(|e| map(&e.vertical)).unwrap_or(view_up);
+                let map_ground = map_error.and_then(|e| map(&e.ground)).unwrap_or(view_ground);
+                *view.heights.get_mut(col, row) = (f64::from(h) - f64::from(ground)) as f32;
+                *view.sigma_up.get_mut(col, row) = view_up.hypot(map_up) as f32;
+                *view.sigma_ground.get_mut(col, row) = view_ground.hypot(map_ground) as f32;
             }
         }
     }
-    PredictedView { heights, range_sigma, eye_height: params.mast_height }
+    view
 }
 
 /// The probability map of a predicted view as the matcher sees it: the view filtered as a
 /// local map is (gap filling, high pass), subsampled to the matcher's cell budget, and each
-/// cell spread over the voxels its range error may put it in, as points `[x, y, z,
-/// probability]`. Along the ray the error moves a cell both across the ground and up or down;
-/// the two parts are taken as independent: across the ground by a three-point Gauss-Hermite
-/// rule (nodes 0 and +-sqrt(3) sigma), up and down exactly over the height layers (a node rule
-/// there would keep the map's own layer pattern at full weight and predict a sharp peak on
-/// featureless ground, whose cells straddle a layer edge).
+/// cell spread over the voxels its errors may put it in, as points `[x, y, z, probability]`:
+/// exactly over the height layers for the vertical error, by a three-point Gauss-Hermite rule
+/// (nodes 0 and +-sqrt(3) sigma) along the ray across the ground for the other. The two are
+/// taken as independent (along one ray they are one range error; the map's and the view's
+/// rays differ). A node rule in height would keep the map's own layer pattern at full weight
+/// and predict a sharp peak on featureless ground, whose cells straddle a layer edge.
 pub fn probability_points(view: &PredictedView, target: &TargetParams) -> Vec<[f64; 4]> {
     const RULE: [(f64, f64); 3] =
         [(0.0, 2.0 / 3.0), (-1.732_050_807_568_877_2, 1.0 / 6.0), (1.732_050_807_568_877_2, 1.0 / 6.0)];
     // Layers of smaller probability are left out: they change the expectation by less than
     // the quadrature does.
     const MIN_PROBABILITY: f64 = 1e-3;
+    // At most this many layers each side of a cell's own (a wildly uncertain map cell would
+    // otherwise spread over thousands).
+    const MAX_LAYERS: i64 = 32;
     let params = &target.params;
     let layer = view.heights.resolution() / params.vertical_exaggeration;
     let filled = fill_gaps(&view.heights, params.fill_gaps_cells);
@@ -177,33 +221,33 @@ pub fn probability_points(view: &PredictedView, target: &TargetParams) -> Vec<[f
         cells = (0..max).map(|i| cells[(i as f64 * stride) as usize]).collect();
     }
     let cdf = |v: f64| 0.5 * (1.0 + libm::erf(v * std::f64::consts::FRAC_1_SQRT_2));
+    let known = |grid: &Grid2<f32>, x: f64, y: f64| {
+        grid.at_world(x, y).copied().map(f64::from).filter(|s| s.is_finite())
+    };
     let mut out = Vec::with_capacity(12 * cells.len());
     for [x, y, z] in cells {
-        let Some(h) = filled.at_world(x, y).copied().map(f64::from) else {
+        let Some(h) = known(&filled, x, y) else {
             continue;
         };
         let rise = h - view.eye_height;
         let ground = x.hypot(y);
-        let length = ground.hypot(rise);
         if ground <= 0.0 {
             continue;
         }
-        // Cells filled between measurements have no sigma of their own: the view's, and a map
-        // as good.
-        let sigma = view
-            .range_sigma
-            .at_world(x, y)
-            .copied()
-            .map(f64::from)
-            .filter(|s| s.is_finite())
-            .unwrap_or(std::f64::consts::SQRT_2 * target.range_noise_at_1m * length * length);
-        let sigma_ground = sigma * ground / length;
-        let sigma_up = sigma * rise.abs() / length;
+        // Cells the gap filling added have no sigma of their own: the view's, and a map as
+        // good.
+        let r = ground.hypot(rise);
+        let fallback = std::f64::consts::SQRT_2 * view.range_noise.sigma(r);
+        let sigma_up = known(&view.sigma_up, x, y).unwrap_or(fallback * rise.abs() / r);
+        let sigma_ground = known(&view.sigma_ground, x, y).unwrap_or(fallback * ground / r);
+        let own = (z / layer).floor() as i64;
         let (lo, hi) = if sigma_up > 1e-9 {
-            (((z - 3.0 * sigma_up) / layer).floor() as i64, ((z + 3.0 * sigma_up) / layer).floor() as i64)
+            (
+                (((z - 3.0 * sigma_up) / layer).floor() as i64).max(own - MAX_LAYERS),
+                (((z + 3.0 * sigma_up) / layer).floor() as i64).min(own + MAX_LAYERS),
+            )
         } else {
-            let k = (z / layer).floor() as i64;
-            (k, k)
+            (own, own)
         };
         for k in lo..=hi {
             let p = if lo == hi {
@@ -217,7 +261,8 @@ pub fn probability_points(view: &PredictedView, target: &TargetParams) -> Vec<[f
             }
             let centre = (k as f64 + 0.5) * layer;
             for (node, weight) in RULE {
-                let shift = node * sigma_ground / ground;
+                // Never through the mast to the other side.
+                let shift = (node * sigma_ground / ground).clamp(-0.9, 0.9);
                 out.push([x + shift * x, y + shift * y, centre, weight * p]);
             }
         }
@@ -256,14 +301,16 @@ pub fn predict_uncertainty(
     let spread = squared / mass * step * step;
     // Variance of a normal fitted to the peak along each axis (log-likelihood curvature at the
     // planned pose); a flat or concave axis counts as one step^2.
-    let fitted = |di: i32, dj: i32, half: i32| {
+    // A flat or concave axis, or one the window does not search, is as uncertain as the window.
+    let fitted = |di: i32, dj: i32, half: i32, width: f64| {
+        let flat = width * width;
         if half == 0 {
-            return step * step;
+            return flat;
         }
         let c = 2.0 * scores[index(0, 0, 0)] - scores[index(di, dj, 0)] - scores[index(-di, -dj, 0)];
-        if c > 0.0 { (t * step * step / c).min(1e6) } else { step * step }
+        if c > 0.0 { (t * step * step / c).min(flat) } else { flat }
     };
-    let (vx, vy) = (fitted(1, 0, hx), fitted(0, 1, hy));
+    let (vx, vy) = (fitted(1, 0, hx, window.half_x.max(step)), fitted(0, 1, hy, window.half_y.max(step)));
     let sigma = (vx + vy).sqrt();
     let cost = (spread + vx.min(step * step) + vy.min(step * step)).sqrt();
     Ok((sigma, far / mass, cost))
@@ -282,11 +329,10 @@ pub fn rank_targets(
 }
 
 /// Ranks the given pan angles (body frame, rad) for localising at `next_pose` against
-/// `global` (best first); `map_error` is each global cell's range error (see
-/// [`predicted_view`]).
+/// `global` (best first); `map_error` is the map's own error (see [`predicted_view`]).
 pub fn rank_pans(
     global: &Grid2<f32>,
-    map_error: Option<&Grid2<f32>>,
+    map_error: Option<&MapError>,
     next_pose: &Pose2,
     pans: &[f64],
     params: &TargetParams,
@@ -414,7 +460,7 @@ mod tests {
     #[test]
     fn prefers_rocks_mapped_from_close_range_to_rocks_mapped_from_afar() {
         // Rocks to the left and to the right of a rover facing east; the map of one side was
-        // made from close by (1 cm range error), of the other from afar (8 cm): the view of
+        // made from close by (1 cm range error), of the other from afar (10 cm): the view of
         // the well-mapped side must be chosen, whichever side it is.
         let global = terrain_with_rocky_sectors(&[std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2]);
         let params = TargetParams {
@@ -424,12 +470,18 @@ mod tests {
         let next = Pose2::new(0.0, 0.0, 0.0);
         let pans = [std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2];
         for well_mapped_left in [true, false] {
-            let mut error = Grid2::filled(global.geometry, 0.01f32);
-            for row in 0..error.rows() {
-                for col in 0..error.cols() {
-                    let (_, y) = error.geometry.center(col, row);
+            // Range errors of the mast stereo seen from 1.5 m and from 5 m (1.2 m mast): mostly
+            // across the ground.
+            let mut error = MapError {
+                vertical: Grid2::filled(global.geometry, 0.006f32),
+                ground: Grid2::filled(global.geometry, 0.007f32),
+            };
+            for row in 0..global.rows() {
+                for col in 0..global.cols() {
+                    let (_, y) = global.geometry.center(col, row);
                     if (y > 0.0) != well_mapped_left {
-                        *error.get_mut(col, row) = 0.08;
+                        *error.vertical.get_mut(col, row) = 0.023;
+                        *error.ground.get_mut(col, row) = 0.097;
                     }
                 }
             }
@@ -438,6 +490,43 @@ mod tests {
             assert!((ranked[0].pan - expected).abs() < 1e-9, "{ranked:?}");
             assert!(ranked[1].cost > ranked[0].cost);
         }
+    }
+
+    #[test]
+    fn probability_points_carry_a_cells_errors_as_their_moments() {
+        // One visible cell 3 m ahead on flat ground, 3 cm vertical and 8 cm across-ground error.
+        let geometry =
+            GridGeometry { cols: 200, rows: 200, resolution: 0.05, origin_x: -5.0, origin_y: -5.0 };
+        let (sigma_up, sigma_ground) = (0.03, 0.08);
+        let mut view = PredictedView {
+            heights: Grid2::filled(geometry, f32::NAN),
+            sigma_up: Grid2::filled(geometry, f32::NAN),
+            sigma_ground: Grid2::filled(geometry, f32::NAN),
+            eye_height: 1.2,
+            range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
+        };
+        let (col, row) = geometry.cell_of(3.0, 0.0).expect("cell");
+        let (cx, cy) = geometry.center(col, row);
+        *view.heights.get_mut(col, row) = 0.0;
+        *view.sigma_up.get_mut(col, row) = sigma_up as f32;
+        *view.sigma_ground.get_mut(col, row) = sigma_ground as f32;
+        let params = TargetParams::default();
+        let points = probability_points(&view, &params);
+        let total: f64 = points.iter().map(|p| p[3]).sum();
+        assert!((0.99..=1.0 + 1e-9).contains(&total), "probabilities sum to {total}");
+        let mean = |f: &dyn Fn(&[f64; 4]) -> f64| points.iter().map(|p| p[3] * f(p)).sum::<f64>() / total;
+        // Across the ground the spread runs along the ray (radially from the mast) with the
+        // cell's sigma, and nothing sideways.
+        let (mx, my) = (mean(&|p| p[0]), mean(&|p| p[1]));
+        assert!((mx - cx).abs() < 1e-9 && (my - cy).abs() < 1e-9, "centred: {mx} {my}");
+        let (ux, uy) = (cx / cx.hypot(cy), cy / cx.hypot(cy));
+        let radial = mean(&|p| ((p[0] - cx) * ux + (p[1] - cy) * uy).powi(2)).sqrt();
+        assert!((radial - sigma_ground).abs() < 0.002, "radial sigma {radial}");
+        assert!(mean(&|p| ((p[1] - cy) * ux - (p[0] - cx) * uy).powi(2)) < 1e-12, "nothing sideways");
+        // Up and down over the layers with the cell's sigma, up to the layers' own width.
+        let layer = geometry.resolution / params.params.vertical_exaggeration;
+        let vertical = (mean(&|p| p[2].powi(2)) - mean(&|p| p[2]).powi(2) - layer * layer / 12.0).sqrt();
+        assert!((vertical - sigma_up).abs() < 0.1 * sigma_up, "vertical sigma {vertical}");
     }
 
     #[test]

@@ -344,23 +344,38 @@ impl MlMatcher {
     /// Expected log-likelihood, at every pose of the window's lattice, of a probability map:
     /// weighted rover-frame points `[x, y, z, weight]` (z already high-passed), the weight
     /// being the probability that the point's voxel is seen occupied (paper 000 section 4.4).
-    /// Returns the lattice and its scores indexed `((k + hk) * ny + j + hj) * nx + i + hi`.
-    /// Points over unknown global terrain score the neutral distance's score, as in a match.
+    /// Returns the lattice and its scores indexed `((k + half[2]) * ny + j + half[1]) * nx + i
+    /// + half[0]` with `nx`, `ny` the lattice's sizes along x and y.
+    ///
+    /// As the map-matching localiser does with a real view, points that could leave the mapped
+    /// terrain at some pose of the window (within the window's reach, plus a cell, of unknown
+    /// terrain at its centre) are left out: scoring them would reward or spare poses for overlap,
+    /// not alignment. `EmptyMap` if none remain.
     pub fn expected_log_likelihoods(
         &self,
         points: &[[f64; 4]],
         window: &SearchWindow,
     ) -> Result<(PoseLattice, Vec<f64>), MatchError> {
         window.validate()?;
+        let r = self.voxels.resolution();
+        let radius = points.iter().map(|p| p[0].hypot(p[1])).fold(r, f64::max);
+        let reach = (window.half_x.hypot(window.half_y) + radius * window.half_yaw) / r + 1.0;
+        let limit = (reach * reach).ceil().min(f64::from(u16::MAX - 1)) as u16;
+        let centre = window.center;
+        let points: Vec<[f64; 4]> = points
+            .iter()
+            .copied()
+            .filter(|&[x, y, _, _]| {
+                let w = centre.transform(rovernav_core::Point2::new(x, y));
+                self.voxels.squared_distance_to_unknown(w.x, w.y) > limit
+            })
+            .collect();
         if points.is_empty() {
             return Err(MatchError::EmptyMap { map: "local" });
         }
-        let r = self.voxels.resolution();
-        let radius = points.iter().map(|p| p[0].hypot(p[1])).fold(r, f64::max);
         let lattice = PoseLattice::new(window, r, radius);
         // Squared distances are capped small integers: score each once.
         let table: Vec<f64> = (0..4096usize).map(|n| self.likelihood.score((n as f64).sqrt() * r)).collect();
-        let neutral = self.likelihood.score(self.neutral_distance());
         let [hx, hy, hk] = lattice.half;
         let mut scores = Vec::with_capacity(lattice.size() as usize);
         for k in -hk..=hk {
@@ -372,15 +387,11 @@ impl MlMatcher {
                         .iter()
                         .map(|&[x, y, z, w]| {
                             let (wx, wy) = (pose.x + c * x - s * y, pose.y + s * x + c * y);
-                            let score = if self.voxels.squared_distance_to_unknown(wx, wy) == 0 {
-                                neutral
-                            } else {
-                                let n = usize::from(self.voxels.squared_distance_at(wx, wy, z));
-                                table
-                                    .get(n)
-                                    .copied()
-                                    .unwrap_or_else(|| self.likelihood.score((n as f64).sqrt() * r))
-                            };
+                            let n = usize::from(self.voxels.squared_distance_at(wx, wy, z));
+                            let score = table
+                                .get(n)
+                                .copied()
+                                .unwrap_or_else(|| self.likelihood.score((n as f64).sqrt() * r));
                             w * score
                         })
                         .sum();
