@@ -154,3 +154,21 @@ fn seed_14_pinned_retreats_back_out_and_reach_the_goal_clean() {
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert_eq!(r.hazard_contacts, 0);
 }
+
+/// Seed 4 of the default Mars yard: the rover's own C-obstacles closed a pocket (x 7.2-10.4 m,
+/// y 6.0-8.3 m) and it shuttled in it until the time limit: every restart of boundary following
+/// (after an escape or a fallback) forgot where it had stood, so the best way on led east and
+/// boundary following west again. With the memory kept until motion to goal makes progress it
+/// leaves the pocket; the simulator's outcome and contact count are the truth.
+#[test]
+#[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
+fn seed_4_boundary_following_leaves_the_pocket_and_reaches_the_goal_clean() {
+    let mut mission = Mission::default_mission();
+    mission.seed = 4;
+    mission.navigator = "roverbug".into();
+    let run = run_mission(&mission, "default seed 4", &mut |_| {}).expect("mission runs");
+    let r = &run.report;
+    assert!(r.optimal_length_m.is_some(), "seed 4 has a safe path in truth");
+    assert_eq!(r.outcome, "reached", "{}", r.message);
+    assert_eq!(r.hazard_contacts, 0);
+}

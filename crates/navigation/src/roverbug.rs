@@ -46,6 +46,15 @@
 //!   following finds no silhouette (in clutter the C-obstacles hide each other's), it takes the
 //!   LTG path to an unvisited node minimising path length plus distance to the goal (the
 //!   TangentBug heuristic), and halts only when there is no such node;
+//! * the places where boundary following started (Bug's hit points, with `V_loop` the
+//!   paper's loop memory) and where escapes started are remembered across the restarts this
+//!   implementation adds (escapes, retreats, the fallbacks to the best way on) and forgotten
+//!   only when motion-to-goal makes progress again (a motion-to-goal subpath is driven, or the
+//!   leaving condition fires): boundary following and its fallbacks never lead back to them,
+//!   so the rover cannot shuttle between the same places of a pocket its own C-obstacles
+//!   close (seed 4 of the default yard, where every restart forgot them). Only these restart
+//!   points, not every position: a boundary around an enclosed goal must be followed past
+//!   ground already crossed for the loop through `V_loop` to close;
 //! * the loop around `V_loop` proves the goal unreachable only when the positions of the
 //!   boundary-following segment wind around the goal (more than 3/4 of a turn): in clutter the
 //!   rover can come back near `V_loop` around another obstacle;
@@ -210,6 +219,10 @@ pub struct RoverBug {
     drive_from: Option<Point2>,
     /// Positions of the current boundary-following segment.
     visited: Vec<Point2>,
+    /// Where boundary following started and escapes started since motion-to-goal last made
+    /// progress: unlike `visited` they survive a restart, so boundary following cannot cycle
+    /// between the same places.
+    been: Vec<Point2>,
     /// Positions the rover has stood at (estimate), oldest first: ground its body has crossed.
     trail: Vec<Point2>,
     /// Where planning found no way on: recorded as small C-obstacles so that no later subpath
@@ -254,6 +267,7 @@ impl RoverBug {
             obstacles: Vec::new(),
             carried: Vec::new(),
             visited: Vec::new(),
+            been: Vec::new(),
             trail: Vec::new(),
             dead_ends: Vec::new(),
             retreats: 0,
@@ -731,6 +745,9 @@ impl RoverBug {
         if length < 0.1 {
             return false;
         }
+        // Motion-to-goal drives on toward a node of G1: progress, so the restart points are
+        // forgotten (the paper's memory lives for one boundary-following episode).
+        self.been.clear();
         self.execute(sub);
         true
     }
@@ -758,6 +775,7 @@ impl RoverBug {
         }
         self.mode = Mode::Virtual { sense, scans: vec![0] };
         self.visited = vec![x];
+        self.remember(x);
     }
 
     /// The silhouette vertex of the obstacle blocking the way to the goal in the sense `s`
@@ -781,8 +799,8 @@ impl RoverBug {
             .iter()
             .copied()
             .filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i) && ltg.nodes[i].p.dist(x) > 0.1)
-            // Never back to where boundary following has already been.
-            .filter(|&i| self.visited.iter().all(|q| q.dist(ltg.nodes[i].p) > 0.3))
+            // Never back to where this segment has been, nor to a restart point.
+            .filter(|&i| self.away_from_visits(ltg.nodes[i].p, 0.3))
             // Onward in the positive sense: on that side of the goal direction.
             .filter(|&i| virtual_mode || key(i) > -0.05)
             .collect();
@@ -810,17 +828,30 @@ impl RoverBug {
         ltg.adj[0]
             .iter()
             .map(|&(j, _)| ltg.nodes[j].p)
-            .filter(|p| p.dist(x) > 0.2 && self.visited.iter().all(|q| q.dist(*p) > 0.5))
+            .filter(|&p| p.dist(x) > 0.2 && self.away_from_visits(p, 0.5))
             .max_by(|a, b| key(*a).total_cmp(&key(*b)))
             .map(|p| vec![x, p])
     }
 
+    /// Whether `p` lies farther than `radius` from every position of this boundary-following
+    /// segment and from every restart point since motion-to-goal last made progress.
+    fn away_from_visits(&self, p: Point2, radius: f64) -> bool {
+        self.visited.iter().chain(&self.been).all(|q| q.dist(p) > radius)
+    }
+
+    /// Remembers a restart point (see `been`).
+    fn remember(&mut self, x: Point2) {
+        if self.been.last().is_none_or(|q| q.dist(x) > 1e-9) {
+            self.been.push(x);
+        }
+    }
+
     /// The locally best way on (TangentBug's heuristic): the LTG path from the rover to a node
-    /// away from every position of this boundary-following segment that minimises its length
-    /// plus the node's distance to the goal, cut at the wedge radius.
+    /// away from every position of this boundary-following segment and every restart point that
+    /// minimises its length plus the node's distance to the goal, cut at the wedge radius.
     fn best_exit(&self, x: Point2, goal: Point2) -> Option<Vec<Point2>> {
         let ltg = self.build_ltg(x, goal);
-        let fresh = |p: Point2| p.dist(x) > 0.2 && self.visited.iter().all(|q| q.dist(p) > 0.5);
+        let fresh = |p: Point2| p.dist(x) > 0.2 && self.away_from_visits(p, 0.5);
         let path =
             self.search_with(&ltg, goal, &|i, n: &Node| (i != 0 && fresh(n.p)).then(|| n.p.dist(goal)))?;
         let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
@@ -1012,6 +1043,7 @@ impl RoverBug {
             .into_iter()
             .find(|&d| self.motion_hazards(pose, &Self::arc_poses(pose, d, 0.0)).is_empty())?;
         self.escapes = (count, x);
+        self.remember(x);
         self.finish = None;
         self.mode = Mode::MotionToGoal;
         self.last_motion = Some(distance.signum());
@@ -1240,6 +1272,7 @@ impl RoverBug {
         }) {
             let end = ltg.nodes[*path.last().expect("non-empty path")];
             self.d_leave = Some(end.p.dist(goal));
+            self.been.clear();
             self.mode = Mode::MotionToGoal;
             let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
             let sub = self.truncate(&points, x);
@@ -1774,6 +1807,38 @@ mod tests {
         bug.reversing = false;
         bug.waypoints = VecDeque::from(vec![Point2::new(2.0 * 30f64.to_radians().cos(), -1.0)]);
         assert!(!matches!(bug.drive_waypoints(pose, Point2::new(9.0, 9.0)), NavCommand::Drive { .. }));
+    }
+
+    /// The first waypoint of the best way on from the origin toward `goal`.
+    fn first_exit_waypoint(bug: &RoverBug, goal: Point2) -> Point2 {
+        let path = bug.best_exit(Point2::new(0.0, 0.0), goal).expect("a way on");
+        path[1]
+    }
+
+    #[test]
+    fn seed_4_boundary_following_memory_survives_a_restart() {
+        // Square [2,3]x[-0.5,0.5] across the line to a goal a little left of the axis: by hand
+        // the way on passes the upper corners (path plus remaining distance 6.07 m against
+        // 6.12 m by the lower ones). Once boundary following has restarted at both upper
+        // corners (escapes from there), a new restart must not lead back to them: the only
+        // nodes left are the lower corners.
+        let goal = Point2::new(6.0, 0.2);
+        let x = Point2::new(0.0, 0.0);
+        let mut bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
+        assert!(first_exit_waypoint(&bug, goal).y > 0.0);
+        bug.start_boundary_following(x, goal);
+        bug.remember(Point2::new(2.0, 0.5));
+        bug.remember(Point2::new(3.0, 0.5));
+        bug.start_boundary_following(x, goal);
+        assert_eq!(bug.visited, vec![x], "a restart begins a new segment");
+        let wp = first_exit_waypoint(&bug, goal);
+        assert!(wp.y < 0.0 && (wp.x - 2.0).abs() < 1e-6, "{wp:?}");
+        // Motion to goal makes progress (a G1 node past the lower corners is clear to the
+        // goal): the restart points are forgotten, and the upper side is open again.
+        assert!(bug.motion_to_goal(x, goal));
+        assert!(bug.been.is_empty());
+        bug.visited.clear();
+        assert!(first_exit_waypoint(&bug, goal).y > 0.0);
     }
 
     #[test]
