@@ -46,15 +46,17 @@
 //!   following finds no silhouette (in clutter the C-obstacles hide each other's), it takes the
 //!   LTG path to an unvisited node minimising path length plus distance to the goal (the
 //!   TangentBug heuristic), and halts only when there is no such node;
-//! * the places where boundary following started (Bug's hit points, with `V_loop` the
-//!   paper's loop memory) and where escapes started are remembered across the restarts this
-//!   implementation adds (escapes, retreats, the fallbacks to the best way on) and forgotten
-//!   only when motion-to-goal makes progress again (a motion-to-goal subpath is driven, or the
-//!   leaving condition fires): boundary following and its fallbacks never lead back to them,
-//!   so the rover cannot shuttle between the same places of a pocket its own C-obstacles
-//!   close (seed 4 of the default yard, where every restart forgot them). Only these restart
-//!   points, not every position: a boundary around an enclosed goal must be followed past
-//!   ground already crossed for the loop through `V_loop` to close;
+//! * the places where boundary following started (Bug's hit points) and where escapes
+//!   started are remembered across the restarts this implementation adds (escapes, retreats),
+//!   while `visited` holds one boundary-following segment only, and forgotten when
+//!   motion-to-goal plans a subpath again or the leaving condition fires: boundary following
+//!   and its fallbacks never target nodes near them, so the rover cannot shuttle between the
+//!   same places of a pocket its own C-obstacles close (seed 4 of the default yard, where
+//!   every restart forgot them). Only these restart points, not every position: a boundary
+//!   around an enclosed goal must be followed past ground already crossed for the loop through
+//!   `V_loop` to close. (A planned subpath is not yet proven progress: a retreat followed by a
+//!   motion-to-goal plan back to the same hit point forgets them; clearing only on getting
+//!   closer to the goal than every restart point is the stricter rule, not yet measured.);
 //! * the loop around `V_loop` proves the goal unreachable only when the positions of the
 //!   boundary-following segment wind around the goal (more than 3/4 of a turn): in clutter the
 //!   rover can come back near `V_loop` around another obstacle;
@@ -745,8 +747,8 @@ impl RoverBug {
         if length < 0.1 {
             return false;
         }
-        // Motion-to-goal drives on toward a node of G1: progress, so the restart points are
-        // forgotten (the paper's memory lives for one boundary-following episode).
+        // Motion-to-goal drives on toward a node of G1: boundary following is over, so are its
+        // restart points (the paper's memory lives for one boundary-following episode).
         self.been.clear();
         self.execute(sub);
         true
@@ -820,7 +822,8 @@ impl RoverBug {
     }
 
     /// The most extreme node in the sense `s` (from the goal direction) joined to the rover by
-    /// a free tangent segment and away from every position of this boundary-following segment.
+    /// a free tangent segment and away from every position of this boundary-following segment
+    /// and every restart point.
     fn fallback_step(&self, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
         let ltg = self.build_ltg(x, goal);
         let reference = goal.sub(x).angle();
@@ -1833,8 +1836,8 @@ mod tests {
         assert_eq!(bug.visited, vec![x], "a restart begins a new segment");
         let wp = first_exit_waypoint(&bug, goal);
         assert!(wp.y < 0.0 && (wp.x - 2.0).abs() < 1e-6, "{wp:?}");
-        // Motion to goal makes progress (a G1 node past the lower corners is clear to the
-        // goal): the restart points are forgotten, and the upper side is open again.
+        // Motion to goal plans a subpath again (round the upper corners): the restart points
+        // are forgotten, and the upper side is open again.
         assert!(bug.motion_to_goal(x, goal));
         assert!(bug.been.is_empty());
         bug.visited.clear();
