@@ -48,15 +48,15 @@
 //!   TangentBug heuristic), and halts only when there is no such node;
 //! * the places where boundary following started (Bug's hit points) and where escapes
 //!   started are remembered across the restarts this implementation adds (escapes, retreats),
-//!   while `visited` holds one boundary-following segment only, and forgotten when
-//!   motion-to-goal plans a subpath again or the leaving condition fires: boundary following
-//!   and its fallbacks never target nodes near them, so the rover cannot shuttle between the
-//!   same places of a pocket its own C-obstacles close (seed 4 of the default yard, where
-//!   every restart forgot them). Only these restart points, not every position: a boundary
-//!   around an enclosed goal must be followed past ground already crossed for the loop through
-//!   `V_loop` to close. (A planned subpath is not yet proven progress: a retreat followed by a
-//!   motion-to-goal plan back to the same hit point forgets them; clearing only on getting
-//!   closer to the goal than every restart point is the stricter rule, not yet measured.);
+//!   while `visited` holds one boundary-following segment only, and forgotten when the
+//!   leaving condition fires or motion-to-goal plans a subpath ending nearer the goal than all
+//!   of them (progress, as past Bug's hit points; a plan back to one is not): boundary
+//!   following and its fallbacks do not target nodes near them, so the rover cannot shuttle
+//!   between the same places of a pocket its own C-obstacles close (seed 4 of the default
+//!   yard, where every restart forgot them); when every way on is near one, the best way on
+//!   takes one anyway rather than halt. Only these restart points, not every position: a
+//!   boundary around an enclosed goal must be followed past ground already crossed for the
+//!   loop through `V_loop` to close;
 //! * the loop around `V_loop` proves the goal unreachable only when the positions of the
 //!   boundary-following segment wind around the goal (more than 3/4 of a turn): in clutter the
 //!   rover can come back near `V_loop` around another obstacle;
@@ -747,9 +747,13 @@ impl RoverBug {
         if length < 0.1 {
             return false;
         }
-        // Motion-to-goal drives on toward a node of G1: boundary following is over, so are its
-        // restart points (the paper's memory lives for one boundary-following episode).
-        self.been.clear();
+        // Motion-to-goal drives on toward a node of G1; its restart points are forgotten only
+        // when that is progress past all of them (as Bug's hit points: a subpath back toward
+        // a place boundary following started from is not).
+        let end = *sub.last().expect("a subpath of positive length");
+        if self.been.iter().all(|b| end.dist(goal) < b.dist(goal) - 0.3) {
+            self.been.clear();
+        }
         self.execute(sub);
         true
     }
@@ -853,8 +857,15 @@ impl RoverBug {
     /// away from every position of this boundary-following segment and every restart point that
     /// minimises its length plus the node's distance to the goal, cut at the wedge radius.
     fn best_exit(&self, x: Point2, goal: Point2) -> Option<Vec<Point2>> {
+        // The restart points are a preference: with every way on near one, one near a restart
+        // point beats halting.
+        self.best_exit_avoiding(x, goal, &self.been).or_else(|| self.best_exit_avoiding(x, goal, &[]))
+    }
+
+    /// [`Self::best_exit`] avoiding this segment's positions and the points `avoid`.
+    fn best_exit_avoiding(&self, x: Point2, goal: Point2, avoid: &[Point2]) -> Option<Vec<Point2>> {
         let ltg = self.build_ltg(x, goal);
-        let fresh = |p: Point2| p.dist(x) > 0.2 && self.away_from_visits(p, 0.5);
+        let fresh = |p: Point2| p.dist(x) > 0.2 && self.visited.iter().chain(avoid).all(|q| q.dist(p) > 0.5);
         let path =
             self.search_with(&ltg, goal, &|i, n: &Node| (i != 0 && fresh(n.p)).then(|| n.p.dist(goal)))?;
         let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
@@ -1836,9 +1847,20 @@ mod tests {
         assert_eq!(bug.visited, vec![x], "a restart begins a new segment");
         let wp = first_exit_waypoint(&bug, goal);
         assert!(wp.y < 0.0 && (wp.x - 2.0).abs() < 1e-6, "{wp:?}");
-        // Motion to goal plans a subpath again (round the upper corners): the restart points
-        // are forgotten, and the upper side is open again.
+        // With the lower corners remembered too, every way on is near a restart point: one
+        // near them still beats halting.
+        bug.remember(Point2::new(2.0, -0.5));
+        bug.remember(Point2::new(3.0, -0.5));
+        assert!(bug.best_exit_avoiding(x, goal, &bug.been).is_none());
+        assert!(bug.best_exit(x, goal).is_some());
+        // Motion to goal from the start plans round the upper corners again: not progress
+        // past the restart points, which stay remembered.
+        let remembered = bug.been.len();
         assert!(bug.motion_to_goal(x, goal));
+        assert_eq!(bug.been.len(), remembered);
+        // From beyond the square its subpath ends nearer the goal than every restart point:
+        // they are forgotten, and the upper side is open again.
+        assert!(bug.motion_to_goal(Point2::new(4.0, 0.0), goal));
         assert!(bug.been.is_empty());
         bug.visited.clear();
         assert!(first_exit_waypoint(&bug, goal).y > 0.0);
