@@ -18,7 +18,10 @@ pub use nav::{
     Overlay, OverlayKind, PoseEstimate, SenseRequest,
 };
 pub use rover::RoverConfig;
-pub use sensors::{CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, SensorFrame, Wedge};
+pub use sensors::{
+    CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, RangeNoise, SensorFrame,
+    SensorNoise, Wedge,
+};
 
 /// The folder holding rovernav's real data sets (`ROVERNAV_DATA`, default `../shared/data`).
 ///

@@ -23,14 +23,14 @@
 use std::collections::HashMap;
 
 use rovernav_core::{
-    CameraKind, Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose2, Pose3,
-    PoseEstimate, RoverConfig, SensorFrame,
+    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, PointCloud, Pose2, Pose3, PoseEstimate,
+    RoverConfig, SensorFrame, SensorNoise,
 };
 
 use crate::ekf::{Ekf, EkfParams};
 use crate::matching::elevation::bin_points;
 use crate::matching::{MatchResult, MlMatcher, MlParams, SearchWindow};
-use crate::target::{MapError, RangeNoise, TargetParams, rank_pans};
+use crate::target::{MapError, TargetParams, rank_pans};
 
 /// Parameters of the map-matching localiser.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,13 +76,9 @@ pub struct EkfMlParams {
     /// Localisation targets are chosen among the pans `PI` and `PI +- target_spread` (rad):
     /// views back over the terrain just crossed.
     pub target_spread: f64,
-    /// Range error of the mast stereo (the map's own error, for localisation targets; the
-    /// sensors' calibrated figures, here the simulator's defaults).
-    pub mast_range_noise: RangeNoise,
-    /// Range error of the body stereo pairs.
-    pub body_range_noise: RangeNoise,
-    /// Range error of the LIDAR.
-    pub lidar_range_noise: RangeNoise,
+    /// The calibrated range error of each range sensor: the map's own error, which localisation
+    /// target selection predicts with (here the simulator's defaults).
+    pub sensor_noise: SensorNoise,
     /// Matcher parameters.
     pub matcher: MlParams,
 }
@@ -106,9 +102,7 @@ impl Default for EkfMlParams {
             min_local_cells: 300,
             select_targets: false,
             target_spread: std::f64::consts::FRAC_PI_4,
-            mast_range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
-            body_range_noise: RangeNoise { constant: 0.0, quadratic: 0.01 },
-            lidar_range_noise: RangeNoise { constant: 0.015, quadratic: 0.0 },
+            sensor_noise: SensorNoise::default(),
             matcher: MlParams {
                 max_local_cells: Some(2000),
                 vertical_exaggeration: 3.0,
@@ -329,7 +323,7 @@ impl EkfMl {
                 fov: config.mast_fov,
                 mast_height: config.mast_height,
                 max_range: config.mast_range,
-                range_noise: params.mast_range_noise,
+                range_noise: params.sensor_noise.mast,
                 // The prediction scores as many cells as the fix will: with a fifth of them
                 // (400) the few rocks of a view over the rover's own smooth track were mostly
                 // dropped and straight back was predicted the worst view while real fixes there
@@ -482,11 +476,7 @@ impl EkfMl {
         let points: Vec<[f64; 5]> = clouds
             .iter()
             .flat_map(|c| {
-                let noise = match c.camera {
-                    CameraKind::Mast => p.mast_range_noise,
-                    CameraKind::BodyFront | CameraKind::BodyRear => p.body_range_noise,
-                    CameraKind::Lidar => p.lidar_range_noise,
-                };
+                let noise = p.sensor_noise.of(c.camera);
                 c.points.iter().map(move |q| (c.origin, noise, q))
             })
             .filter_map(|(o, noise, q)| {

@@ -18,26 +18,10 @@
 //! by gives a sharp peak; featureless ground, or terrain mapped from afar, a broad one or
 //! competing peaks. The direction with the smallest spread is the localisation target.
 
-use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, wrap_angle};
+use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, RangeNoise, wrap_angle};
 
 use crate::matching::elevation::{fill_gaps, high_pass, occupied_cells};
 use crate::matching::{MatchError, MlMatcher, MlParams, SearchWindow};
-
-/// A range sensor's error model: one sigma `constant + quadratic r^2` at range r (m).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RangeNoise {
-    /// Range-independent part (m).
-    pub constant: f64,
-    /// Coefficient of the squared range (1/m): stereo's disparity error.
-    pub quadratic: f64,
-}
-
-impl RangeNoise {
-    /// The range error's sigma at range `r` (m).
-    pub fn sigma(&self, r: f64) -> f64 {
-        self.constant + self.quadratic * r * r
-    }
-}
 
 /// The map's own error per cell (m, one sigma; NaN where unknown), on the map's geometry.
 #[derive(Clone, Debug)]

@@ -4,7 +4,8 @@ use crate::PerceptionError;
 use crate::footprint::FootprintParams;
 use crate::goodness::GoodnessParams;
 use crate::traversability::TraversabilityParams;
-use rovernav_core::{CameraKind, RoverConfig};
+use rovernav_core::RoverConfig;
+pub use rovernav_core::{RangeNoise, SensorNoise};
 
 /// When the terrain evaluator asks for more range data (paper 004 section 3.3).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,58 +51,6 @@ pub enum HazardHeight {
     Top,
     /// The highest point (noise then biases every cell upwards).
     Max,
-}
-
-/// Range error of one range sensor: standard deviation `constant + quadratic * r^2` at range `r`
-/// (stereo depth error grows with the square of range, a time-of-flight LIDAR's hardly at all).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RangeNoise {
-    /// Range-independent part of the standard deviation (m).
-    pub constant: f64,
-    /// Standard deviation per squared metre of range (1/m).
-    pub quadratic: f64,
-}
-
-impl RangeNoise {
-    /// Standard deviation of the range error at range `r` (m).
-    pub fn sigma(&self, r: f64) -> f64 {
-        self.constant + self.quadratic * r * r
-    }
-}
-
-/// The calibrated range error of each of the rover's range sensors.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SensorNoise {
-    /// Mast stereo pair.
-    pub mast: RangeNoise,
-    /// Front and rear body stereo pairs.
-    pub body: RangeNoise,
-    /// Nodding LIDAR.
-    pub lidar: RangeNoise,
-}
-
-impl Default for SensorNoise {
-    /// Stereo error `r^2 sigma_d / (f b)` of the rover's pairs (mast: ~0.2 m baseline, ~2 mrad
-    /// pixels, 0.4 px matching error; body pairs: wider field, shorter baseline, 2.5 times
-    /// that) and a 1.5 cm time-of-flight LIDAR.
-    fn default() -> Self {
-        Self {
-            mast: RangeNoise { constant: 0.0, quadratic: 0.004 },
-            body: RangeNoise { constant: 0.0, quadratic: 0.01 },
-            lidar: RangeNoise { constant: 0.015, quadratic: 0.0 },
-        }
-    }
-}
-
-impl SensorNoise {
-    /// The model of one sensor.
-    pub fn of(&self, camera: CameraKind) -> RangeNoise {
-        match camera {
-            CameraKind::Mast => self.mast,
-            CameraKind::BodyFront | CameraKind::BodyRear => self.body,
-            CameraKind::Lidar => self.lidar,
-        }
-    }
 }
 
 /// Everything terrain assessment needs: grid size, hazard limits and C-obstacle growth.
@@ -309,6 +258,7 @@ impl TerrainConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rovernav_core::CameraKind;
 
     #[test]
     fn a_negative_range_noise_term_is_named() {
