@@ -18,7 +18,7 @@
 //! by gives a sharp peak; featureless ground, or terrain mapped from afar, a broad one or
 //! competing peaks. The direction with the smallest spread is the localisation target.
 
-use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, RangeNoise, wrap_angle};
+use rovernav_core::{Grid2, GridGeometry, Point2, Pose2, RangeNoise, SensorNoise, wrap_angle};
 
 use crate::matching::elevation::{fill_gaps, high_pass, occupied_cells};
 use crate::matching::{MatchError, MlMatcher, MlParams, SearchWindow};
@@ -65,7 +65,7 @@ impl Default for TargetParams {
             min_range: 1.0,
             max_range: 5.0,
             mast_height: 1.2,
-            range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
+            range_noise: SensorNoise::default().mast,
             window_xy: 0.25,
             window_yaw: 0.0,
             params: MlParams::default(),
@@ -105,8 +105,6 @@ pub struct PredictedView {
     pub sigma_ground: Grid2<f32>,
     /// Height of the mast's eye above the ground under the rover (m).
     pub eye_height: f64,
-    /// The view's range error model (for cells the matcher's gap filling adds).
-    pub range_noise: RangeNoise,
 }
 
 /// The view expected from `pose` looking along body bearing `pan`: the known cells of `global`
@@ -129,7 +127,6 @@ pub fn predicted_view(
         sigma_up: Grid2::filled(geometry, f32::NAN),
         sigma_ground: Grid2::filled(geometry, f32::NAN),
         eye_height: params.mast_height,
-        range_noise: params.range_noise,
     };
     let height = |p: Point2| global.at_world(p.x, p.y).copied().filter(|h| h.is_finite());
     let Some(ground) = height(pose.position()) else {
@@ -221,7 +218,7 @@ pub fn probability_points(view: &PredictedView, target: &TargetParams) -> Vec<[f
         // Cells the gap filling added have no sigma of their own: the view's, and a map as
         // good.
         let r = ground.hypot(rise);
-        let fallback = std::f64::consts::SQRT_2 * view.range_noise.sigma(r);
+        let fallback = std::f64::consts::SQRT_2 * target.range_noise.sigma(r);
         let sigma_up = known(&view.sigma_up, x, y).unwrap_or(fallback * rise.abs() / r);
         let sigma_ground = known(&view.sigma_ground, x, y).unwrap_or(fallback * ground / r);
         let own = (z / layer).floor() as i64;
@@ -487,7 +484,6 @@ mod tests {
             sigma_up: Grid2::filled(geometry, f32::NAN),
             sigma_ground: Grid2::filled(geometry, f32::NAN),
             eye_height: 1.2,
-            range_noise: RangeNoise { constant: 0.0, quadratic: 0.004 },
         };
         let (col, row) = geometry.cell_of(3.0, 0.0).expect("cell");
         let (cx, cy) = geometry.center(col, row);
