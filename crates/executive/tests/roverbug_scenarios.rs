@@ -145,14 +145,7 @@ fn goal_inside_a_rock_ends_at_a_vertex_of_its_c_obstacle() {
 #[test]
 #[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
 fn seed_14_pinned_retreats_back_out_and_reach_the_goal_clean() {
-    let mut mission = Mission::default_mission();
-    mission.seed = 14;
-    mission.navigator = "roverbug".into();
-    let run = run_mission(&mission, "default seed 14", &mut |_| {}).expect("mission runs");
-    let r = &run.report;
-    assert!(r.optimal_length_m.is_some(), "seed 14 has a safe path in truth");
-    assert_eq!(r.outcome, "reached", "{}", r.message);
-    assert_eq!(r.hazard_contacts, 0);
+    assert_default_yard_seed_reached_clean(14);
 }
 
 /// Seed 4 of the default Mars yard: the rover's own C-obstacles closed a pocket (x 7.2-10.4 m,
@@ -163,12 +156,18 @@ fn seed_14_pinned_retreats_back_out_and_reach_the_goal_clean() {
 #[test]
 #[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
 fn seed_4_boundary_following_leaves_the_pocket_and_reaches_the_goal_clean() {
+    assert_default_yard_seed_reached_clean(4);
+}
+
+/// Runs RoverBug on a seed of the default Mars yard and checks, against the simulator, that the
+/// seed has a safe path and the rover reached the goal without a hazard contact.
+fn assert_default_yard_seed_reached_clean(seed: u64) {
     let mut mission = Mission::default_mission();
-    mission.seed = 4;
+    mission.seed = seed;
     mission.navigator = "roverbug".into();
-    let run = run_mission(&mission, "default seed 4", &mut |_| {}).expect("mission runs");
+    let run = run_mission(&mission, &format!("default seed {seed}"), &mut |_| {}).expect("mission runs");
     let r = &run.report;
-    assert!(r.optimal_length_m.is_some(), "seed 4 has a safe path in truth");
+    assert!(r.optimal_length_m.is_some(), "seed {seed} has a safe path in truth");
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert_eq!(r.hazard_contacts, 0);
 }

@@ -424,33 +424,13 @@ impl MlMatcher {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use crate::synthetic::{TerrainParams, fractal_terrain};
     use rovernav_core::{GridGeometry, Point2, Pose2};
 
-    /// Gentle noise with scattered rocks, 8 m square at 5 cm.
+    /// Rocky synthetic terrain, 8 m square at 5 cm around the origin.
     fn rocky_map() -> Grid2<f32> {
-        let geometry =
-            GridGeometry { cols: 160, rows: 160, resolution: 0.05, origin_x: -4.0, origin_y: -4.0 };
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let mut g = Grid2::filled(geometry, 0.0f32);
-        for h in &mut g.data {
-            *h = rng.random_range(-0.005..0.005);
-        }
-        for _ in 0..60 {
-            let (cx, cy, radius) =
-                (rng.random_range(-3.5..3.5), rng.random_range(-3.5..3.5), rng.random_range(0.1..0.3));
-            for row in 0..160 {
-                for col in 0..160 {
-                    let (x, y) = geometry.center(col, row);
-                    let q = ((x - cx).powi(2) + (y - cy).powi(2)) / (radius * radius);
-                    if q < 1.0 {
-                        *g.get_mut(col, row) += (0.5 * radius * (1.0 - q).sqrt()) as f32;
-                    }
-                }
-            }
-        }
-        g
+        let params = TerrainParams { size: 8.0, resolution: 0.05, ..Default::default() };
+        fractal_terrain(&params, 11).heights
     }
 
     #[test]
