@@ -171,3 +171,43 @@ fn assert_default_yard_seed_reached_clean(seed: u64) {
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert_eq!(r.hazard_contacts, 0);
 }
+
+/// A ring of 0.6 m rocks (radius 2.2 m, 0.5 m gaps) around the start, with one wider gap of
+/// `gap` metres (rock surface to rock surface) toward the goal 7 m east.
+fn run_boxed_in_start(gap: f64) -> RunOutput {
+    let (c, r, d) = (Point2::new(5.0, 8.0), 2.2, 0.6);
+    let flank = ((gap + d) / 2.0 / r).asin();
+    let pitch = 2.0 * (1.1 / 2.0 / r).asin();
+    let mut rocks = vec![];
+    let mut t = flank;
+    while t < std::f64::consts::TAU - flank - 0.5 * pitch {
+        rocks.push(rock(c.x + r * t.cos(), c.y + r * t.sin(), d));
+        t += pitch;
+    }
+    rocks.push(rock(c.x + r * flank.cos(), c.y - r * flank.sin(), d));
+    run((16.0, 16.0), rocks, Pose2::new(c.x, c.y, 0.0), Point2::new(12.0, 8.0), 0.3)
+}
+
+/// A 0.95 m gap: the C-obstacles grown with the safety buffer (0.6 m) close it and the rover
+/// halted as trapped at the start; grown by the rover radius alone (0.5 m) they leave it open
+/// (measured: the buffered ones stay closed up to 1.0 m, the squeezed ones open from 0.9 m),
+/// so the squeeze takes the rover out through it. The ring is closed everywhere else, so
+/// reaching the goal means passing the gap; the simulator's contact count is the truth.
+#[test]
+fn boxed_in_start_squeezes_through_a_gap_the_safety_buffer_closes() {
+    let out = run_boxed_in_start(0.95);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    assert!(out.report.distance_driven_m < 1.1 * 7.0, "{}", out.report.distance_driven_m);
+}
+
+/// A 0.7 m gap is narrower than the rover's disc C-obstacles: the squeeze does not open it and
+/// the rover halts as trapped without moving.
+#[test]
+fn boxed_in_start_does_not_squeeze_through_a_gap_narrower_than_the_rover_disc() {
+    let out = run_boxed_in_start(0.7);
+    assert_eq!(out.report.outcome, "unreachable", "{}", out.report.message);
+    assert!(out.report.message.starts_with("trapped"), "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
+    assert!(out.report.distance_driven_m < 0.5, "{}", out.report.distance_driven_m);
+}

@@ -37,6 +37,13 @@
 //!   refusing every motion from one place); a loop through `V_loop` around the goal still halts
 //!   at once. A retreat whose turn in place the safety check refuses backs along an arc to its
 //!   waypoint when that sweep is clear (within 45 degrees of the rear);
+//! * before that retreat, motion-to-goal is tried once more on C-obstacles grown by the rover
+//!   radius alone (a *squeeze*): the empirical safety buffer closes gaps of a rock field that
+//!   the rover's disc fits through, while the safety layer below still checks every motion
+//!   against the body outline. When that finds a way on, the next view keeps the smaller
+//!   growth (the rover then stands within the buffer of the gap's rocks); otherwise the
+//!   buffered C-obstacles come back and the retreat goes ahead. Escapes and retreats follow
+//!   only a give-up, never the loop through `V_loop`, which is a proof;
 //! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
 //!   (a crater rim around it) it has no free way out;
@@ -129,6 +136,10 @@ pub struct RoverBugConfig {
     /// Fraction of the safety layer's step limit by which a hazard cell's own points must
     /// stand out from the ground around it to count (see `confirm_hazards`).
     pub confirm_fraction: f64,
+    /// Sensing positions (this one included) at which the C-obstacles stay grown by the rover
+    /// radius alone after a squeeze: motion-to-goal found a way on only without the safety
+    /// buffer (0 disables squeezing).
+    pub squeeze_views: u32,
 }
 
 impl Default for RoverBugConfig {
@@ -151,6 +162,7 @@ impl Default for RoverBugConfig {
             top_allowance: 0.15,
             escape_distance: 0.4,
             confirm_fraction: 0.3,
+            squeeze_views: 2,
         }
     }
 }
@@ -236,6 +248,9 @@ pub struct RoverBug {
     reversing: bool,
     /// Whether the latest halt is planning's give-up (no way on) rather than a proof.
     stuck: bool,
+    /// The last step (sensing position) whose C-obstacles are grown without the safety
+    /// buffer; 0 when not squeezing.
+    squeeze_until: u32,
     waypoints: VecDeque<Point2>,
     subpath: Vec<Point2>,
     finish: Option<(Outcome, String)>,
@@ -275,6 +290,7 @@ impl RoverBug {
             retreats: 0,
             reversing: false,
             stuck: false,
+            squeeze_until: 0,
             contacts: Vec::new(),
             here: None,
             sensed_len: 0,
@@ -642,7 +658,6 @@ impl RoverBug {
         if self.view.is_none() {
             self.new_view(pose);
         }
-        let goal = input.goal.position;
         let Some(view) = self.view.as_mut() else { return };
         for cloud in &input.frame.clouds {
             view.wedges.push(SensedWedge { pose, wedge: cloud.wedge });
@@ -652,13 +667,31 @@ impl RoverBug {
         if let Some(safety) = self.safety.as_mut() {
             safety.update(&input.frame.clouds, &input.estimate);
         }
-        self.obstacles = view.evaluator.layers().c_obstacles(&self.terrain, &view.wedges, Some(goal));
+        self.supersede_carried();
+        self.safety_hazard = self.confirm_hazards();
+        self.rebuild_obstacles(pose, input.goal);
+    }
+
+    /// The terrain settings the C-obstacles are grown with: without the safety buffer while
+    /// squeezing.
+    fn growth_terrain(&self) -> TerrainConfig {
+        if self.steps <= self.squeeze_until {
+            TerrainConfig { safety_buffer: 0.0, ..self.terrain.clone() }
+        } else {
+            self.terrain.clone()
+        }
+    }
+
+    /// Builds the C-obstacles of the current view (with the carried ones, the safety layer's,
+    /// recorded contacts and dead ends, and keep-out zones) and records them for the picture.
+    fn rebuild_obstacles(&mut self, pose: Pose2, goal: &rovernav_core::Goal) {
+        let Some(view) = self.view.as_ref() else { return };
+        let terrain = self.growth_terrain();
+        self.obstacles = view.evaluator.layers().c_obstacles(&terrain, &view.wedges, Some(goal.position));
         self.obstacles.retain(|o| o.vertices.len() >= 3);
         let fresh = self.obstacles.len();
-        self.supersede_carried();
         self.obstacles.extend(self.carried.iter().cloned());
         self.sensed_len = self.obstacles.len();
-        self.safety_hazard = self.confirm_hazards();
         let top = self.top_obstacles(pose);
         self.obstacles.extend(top);
         for o in self.obstacles[..fresh].iter().chain(&self.obstacles[self.sensed_len..]) {
@@ -668,17 +701,35 @@ impl RoverBug {
         self.obstacles.extend(self.dead_ends.iter().cloned());
         // Keep-out zones are C-obstacles like any sensed one (their convex hulls, grown by the
         // same margin: conservative for a non-convex zone).
-        for zone in &input.goal.keep_out {
+        for zone in &goal.keep_out {
             let hull = rovernav_perception::hull::convex_hull(zone);
             if hull.len() >= 3 {
-                self.obstacles.push(CObstacle::from_hull(
-                    hull,
-                    self.terrain.growth(),
-                    self.terrain.max_arc_step,
-                    0,
-                ));
+                self.obstacles.push(CObstacle::from_hull(hull, terrain.growth(), terrain.max_arc_step, 0));
             }
         }
+    }
+
+    /// When planning found no way on without a proof, tries motion-to-goal once more on
+    /// C-obstacles grown by the rover radius alone: the empirical safety buffer closes gaps of
+    /// a rock field that the rover's disc fits through, and the safety layer still checks
+    /// every turn and drive against the body outline. On success the next `squeeze_views`
+    /// views keep the smaller growth (the rover is then within the buffer of the gap's rocks);
+    /// otherwise the C-obstacles are restored. At most once per sensing position.
+    fn squeeze(&mut self, pose: Pose2, goal: &rovernav_core::Goal) -> bool {
+        if self.config.squeeze_views == 0 || self.steps <= self.squeeze_until {
+            return false;
+        }
+        self.squeeze_until = self.steps + self.config.squeeze_views - 1;
+        self.rebuild_obstacles(pose, goal);
+        self.waypoints.clear();
+        if self.motion_to_goal(pose.position(), goal.position) {
+            self.finish = None;
+            self.mode = Mode::MotionToGoal;
+            return true;
+        }
+        self.squeeze_until = 0;
+        self.rebuild_obstacles(pose, goal);
+        false
     }
 
     /// Drops the carried C-obstacles that the current view supersedes: those outside the
@@ -1497,7 +1548,7 @@ impl Navigator for RoverBug {
             if let Some((outcome, why)) = self.finish.clone() {
                 return NavCommand::Finish(outcome, why);
             }
-            let cmd = self.plan(pose, goal);
+            let mut cmd = self.plan(pose, goal);
             // Resting at a vertex of the goal's C-obstacle is arrival, not a reason to back out.
             let at_goal_vertex = cmd.is_none()
                 && self.waypoints.is_empty()
@@ -1512,11 +1563,16 @@ impl Navigator for RoverBug {
             };
             let stuck = gave_up && (self.finish.is_none() || self.stuck);
             self.stuck = false;
-            if gave_up && let Some(escape) = self.escape(pose) {
-                return escape;
-            }
-            if stuck && self.retreat(x, goal) {
-                return self.drive_waypoints(pose, goal);
+            if stuck && self.squeeze(pose, input.goal) {
+                cmd = None;
+            } else {
+                // Only a give-up is escaped from: a loop through V_loop is a proof.
+                if stuck && let Some(escape) = self.escape(pose) {
+                    return escape;
+                }
+                if stuck && self.retreat(x, goal) {
+                    return self.drive_waypoints(pose, goal);
+                }
             }
             if let Some(cmd) = cmd {
                 return cmd;
