@@ -172,27 +172,30 @@ fn assert_default_yard_seed_reached_clean(seed: u64) {
     assert_eq!(r.hazard_contacts, 0);
 }
 
-/// A ring of 0.6 m rocks (radius 2.2 m, 0.5 m gaps) around the start, with one wider gap of
-/// `gap` metres (rock surface to rock surface) toward the goal 7 m east.
+/// A ring of 0.6 m rocks (radius 2.2 m) around the start, with one gap of `gap` metres (rock
+/// surface to rock surface, along the chord) toward the goal 7 m east and gaps of 0.50-0.55 m
+/// elsewhere.
 fn run_boxed_in_start(gap: f64) -> RunOutput {
     let (c, r, d) = (Point2::new(5.0, 8.0), 2.2, 0.6);
+    // Rock centres at +-flank around the goal direction, the rest spread evenly.
     let flank = ((gap + d) / 2.0 / r).asin();
     let pitch = 2.0 * (1.1 / 2.0 / r).asin();
-    let mut rocks = vec![];
-    let mut t = flank;
-    while t < std::f64::consts::TAU - flank - 0.5 * pitch {
-        rocks.push(rock(c.x + r * t.cos(), c.y + r * t.sin(), d));
-        t += pitch;
-    }
-    rocks.push(rock(c.x + r * flank.cos(), c.y - r * flank.sin(), d));
+    let arc = std::f64::consts::TAU - 2.0 * flank;
+    let n = (arc / pitch).floor();
+    let rocks: Vec<Rock> = (0..=n as usize)
+        .map(|k| {
+            let t = flank + k as f64 * arc / n;
+            rock(c.x + r * t.cos(), c.y + r * t.sin(), d)
+        })
+        .collect();
     run((16.0, 16.0), rocks, Pose2::new(c.x, c.y, 0.0), Point2::new(12.0, 8.0), 0.3)
 }
 
-/// A 0.95 m gap: the C-obstacles grown with the safety buffer (0.6 m) close it and the rover
-/// halted as trapped at the start; grown by the rover radius alone (0.5 m) they leave it open
-/// (measured: the buffered ones stay closed up to 1.0 m, the squeezed ones open from 0.9 m),
-/// so the squeeze takes the rover out through it. The ring is closed everywhere else, so
-/// reaching the goal means passing the gap; the simulator's contact count is the truth.
+/// A 0.95 m gap: the C-obstacles grown with the safety buffer (0.6 m) close it (before the
+/// squeeze the rover halted as trapped at the start, measured with squeezing off: trapped up
+/// to 1.0 m, out from 1.05 m); grown by the rover radius alone (0.5 m) they leave it open from
+/// 0.9 m, so the squeeze takes the rover out through it. The ring is closed everywhere else,
+/// so reaching the goal means passing the gap; the simulator's contact count is the truth.
 #[test]
 fn boxed_in_start_squeezes_through_a_gap_the_safety_buffer_closes() {
     let out = run_boxed_in_start(0.95);

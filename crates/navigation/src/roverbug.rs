@@ -37,12 +37,15 @@
 //!   refusing every motion from one place); a loop through `V_loop` around the goal still halts
 //!   at once. A retreat whose turn in place the safety check refuses backs along an arc to its
 //!   waypoint when that sweep is clear (within 45 degrees of the rear);
-//! * before that retreat, motion-to-goal is tried once more on C-obstacles grown by the rover
-//!   radius alone (a *squeeze*): the empirical safety buffer closes gaps of a rock field that
-//!   the rover's disc fits through, while the safety layer below still checks every motion
-//!   against the body outline. When that finds a way on, the next view keeps the smaller
-//!   growth (the rover then stands within the buffer of the gap's rocks); otherwise the
-//!   buffered C-obstacles come back and the retreat goes ahead. Escapes and retreats follow
+//! * before an escape or that retreat, motion-to-goal is tried once more (once per sensing
+//!   position) on C-obstacles grown by the rover radius alone (a *squeeze*): the empirical
+//!   safety buffer closes gaps of a rock field that the rover's disc fits through, while the
+//!   safety layer below still checks every motion against the body outline for step hazards
+//!   (slope hazards have only their C-obstacles; keep-out zones keep the buffer). When that
+//!   finds a way on, the next view keeps the smaller growth (the rover then stands within
+//!   the buffer of the gap's rocks, whose squeezed C-obstacles are carried as they are until
+//!   a nearer view supersedes them); otherwise the buffered
+//!   C-obstacles come back and the escape or retreat goes ahead. Escapes and retreats follow
 //!   only a give-up, never the loop through `V_loop`, which is a proof;
 //! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
@@ -251,6 +254,8 @@ pub struct RoverBug {
     /// The last step (sensing position) whose C-obstacles are grown without the safety
     /// buffer; 0 when not squeezing.
     squeeze_until: u32,
+    /// The step at which a squeeze was last tried.
+    squeezed_at: Option<u32>,
     waypoints: VecDeque<Point2>,
     subpath: Vec<Point2>,
     finish: Option<(Outcome, String)>,
@@ -291,6 +296,7 @@ impl RoverBug {
             reversing: false,
             stuck: false,
             squeeze_until: 0,
+            squeezed_at: None,
             contacts: Vec::new(),
             here: None,
             sensed_len: 0,
@@ -669,7 +675,7 @@ impl RoverBug {
         }
         self.supersede_carried();
         self.safety_hazard = self.confirm_hazards();
-        self.rebuild_obstacles(pose, input.goal);
+        self.rebuild_obstacles(pose, input.goal, true);
     }
 
     /// The terrain settings the C-obstacles are grown with: without the safety buffer while
@@ -683,52 +689,70 @@ impl RoverBug {
     }
 
     /// Builds the C-obstacles of the current view (with the carried ones, the safety layer's,
-    /// recorded contacts and dead ends, and keep-out zones) and records them for the picture.
-    fn rebuild_obstacles(&mut self, pose: Pose2, goal: &rovernav_core::Goal) {
+    /// recorded contacts and dead ends, and keep-out zones), recording the sensed and safety
+    /// layer ones for the picture when `draw`.
+    fn rebuild_obstacles(&mut self, pose: Pose2, goal: &rovernav_core::Goal, draw: bool) {
         let Some(view) = self.view.as_ref() else { return };
         let terrain = self.growth_terrain();
         self.obstacles = view.evaluator.layers().c_obstacles(&terrain, &view.wedges, Some(goal.position));
         self.obstacles.retain(|o| o.vertices.len() >= 3);
         let fresh = self.obstacles.len();
+        // Carried ones keep the growth they were built with: after a squeeze the rover stands
+        // within the buffer of the gap's rocks, and grown back they would hem it in again
+        // (seeds 1..20 of the default yard: mean ratio 1.40 as kept, 1.51 regrown both ways,
+        // 1.44 shrunk during a squeeze only); a nearer view supersedes them.
         self.obstacles.extend(self.carried.iter().cloned());
         self.sensed_len = self.obstacles.len();
         let top = self.top_obstacles(pose);
         self.obstacles.extend(top);
-        for o in self.obstacles[..fresh].iter().chain(&self.obstacles[self.sensed_len..]) {
-            self.drawn_obstacles.push(o.vertices.clone());
+        if draw {
+            for o in self.obstacles[..fresh].iter().chain(&self.obstacles[self.sensed_len..]) {
+                self.drawn_obstacles.push(o.vertices.clone());
+            }
         }
         self.obstacles.extend(self.contacts.iter().cloned());
         self.obstacles.extend(self.dead_ends.iter().cloned());
         // Keep-out zones are C-obstacles like any sensed one (their convex hulls, grown by the
-        // same margin: conservative for a non-convex zone).
+        // same margin: conservative for a non-convex zone). They keep the safety buffer while
+        // squeezing: the safety layer knows nothing of them.
         for zone in &goal.keep_out {
             let hull = rovernav_perception::hull::convex_hull(zone);
             if hull.len() >= 3 {
-                self.obstacles.push(CObstacle::from_hull(hull, terrain.growth(), terrain.max_arc_step, 0));
+                self.obstacles.push(CObstacle::from_hull(
+                    hull,
+                    self.terrain.growth(),
+                    self.terrain.max_arc_step,
+                    0,
+                ));
             }
         }
     }
 
     /// When planning found no way on without a proof, tries motion-to-goal once more on
     /// C-obstacles grown by the rover radius alone: the empirical safety buffer closes gaps of
-    /// a rock field that the rover's disc fits through, and the safety layer still checks
-    /// every turn and drive against the body outline. On success the next `squeeze_views`
-    /// views keep the smaller growth (the rover is then within the buffer of the gap's rocks);
-    /// otherwise the C-obstacles are restored. At most once per sensing position.
+    /// a rock field that the rover's disc fits through. The first leg of the plan is still
+    /// checked against the safety layer's step hazards (body outline plus margin), later legs
+    /// at execution; slope hazards (crater walls) have only their C-obstacles. On success the
+    /// next `squeeze_views` views keep the smaller growth (the rover is then within the buffer
+    /// of the gap's rocks); otherwise the buffered C-obstacles come back. Tried at most once
+    /// per sensing position.
     fn squeeze(&mut self, pose: Pose2, goal: &rovernav_core::Goal) -> bool {
-        if self.config.squeeze_views == 0 || self.steps <= self.squeeze_until {
+        if self.config.squeeze_views == 0 || self.squeezed_at == Some(self.steps) {
             return false;
         }
+        self.squeezed_at = Some(self.steps);
         self.squeeze_until = self.steps + self.config.squeeze_views - 1;
-        self.rebuild_obstacles(pose, goal);
+        self.rebuild_obstacles(pose, goal, false);
         self.waypoints.clear();
         if self.motion_to_goal(pose.position(), goal.position) {
+            // Drawn as planned on.
+            self.rebuild_obstacles(pose, goal, true);
             self.finish = None;
             self.mode = Mode::MotionToGoal;
             return true;
         }
         self.squeeze_until = 0;
-        self.rebuild_obstacles(pose, goal);
+        self.rebuild_obstacles(pose, goal, false);
         false
     }
 
