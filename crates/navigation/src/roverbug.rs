@@ -44,9 +44,9 @@
 //!   (slope hazards have only their C-obstacles; keep-out zones keep the buffer). When that
 //!   finds a way on, the next view keeps the smaller growth (the rover then stands within
 //!   the buffer of the gap's rocks, whose squeezed C-obstacles are carried as they are until
-//!   a nearer view supersedes them); otherwise the buffered
-//!   C-obstacles come back and the escape or retreat goes ahead. Escapes and retreats follow
-//!   only a give-up, never the loop through `V_loop`, which is a proof;
+//!   a nearer view supersedes them); otherwise the buffered C-obstacles come back and the
+//!   escape or retreat goes ahead. Escapes and retreats follow only a give-up, never the loop
+//!   through `V_loop`, which is a proof;
 //! * a rover that finds itself in a C-obstacle's grown margin (noise, a late detection) may
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
 //!   (a crater rim around it) it has no free way out;
@@ -1587,14 +1587,15 @@ impl Navigator for RoverBug {
             };
             let stuck = gave_up && (self.finish.is_none() || self.stuck);
             self.stuck = false;
+            // Only a give-up is squeezed, escaped or retreated from: a loop through V_loop is a
+            // proof.
             if stuck && self.squeeze(pose, input.goal) {
                 cmd = None;
-            } else {
-                // Only a give-up is escaped from: a loop through V_loop is a proof.
-                if stuck && let Some(escape) = self.escape(pose) {
+            } else if stuck {
+                if let Some(escape) = self.escape(pose) {
                     return escape;
                 }
-                if stuck && self.retreat(x, goal) {
+                if self.retreat(x, goal) {
                     return self.drive_waypoints(pose, goal);
                 }
             }
