@@ -251,11 +251,9 @@ pub struct RoverBug {
     reversing: bool,
     /// Whether the latest halt is planning's give-up (no way on) rather than a proof.
     stuck: bool,
-    /// The last step (sensing position) whose C-obstacles are grown without the safety
-    /// buffer; 0 when not squeezing.
-    squeeze_until: u32,
-    /// The step at which a squeeze was last tried.
-    squeezed_at: Option<u32>,
+    /// The step (sensing position) at which a squeeze was last tried, and whether it found a
+    /// way on: then C-obstacles go without the safety buffer for `squeeze_views` steps.
+    squeezed: Option<(u32, bool)>,
     waypoints: VecDeque<Point2>,
     subpath: Vec<Point2>,
     finish: Option<(Outcome, String)>,
@@ -295,8 +293,7 @@ impl RoverBug {
             retreats: 0,
             reversing: false,
             stuck: false,
-            squeeze_until: 0,
-            squeezed_at: None,
+            squeezed: None,
             contacts: Vec::new(),
             here: None,
             sensed_len: 0,
@@ -681,7 +678,9 @@ impl RoverBug {
     /// The terrain settings the C-obstacles are grown with: without the safety buffer while
     /// squeezing.
     fn growth_terrain(&self) -> TerrainConfig {
-        if self.steps <= self.squeeze_until {
+        let squeezing =
+            self.squeezed.is_some_and(|(at, way_on)| way_on && self.steps < at + self.config.squeeze_views);
+        if squeezing {
             TerrainConfig { safety_buffer: 0.0, ..self.terrain.clone() }
         } else {
             self.terrain.clone()
@@ -737,11 +736,10 @@ impl RoverBug {
     /// of the gap's rocks); otherwise the buffered C-obstacles come back. Tried at most once
     /// per sensing position.
     fn squeeze(&mut self, pose: Pose2, goal: &rovernav_core::Goal) -> bool {
-        if self.config.squeeze_views == 0 || self.squeezed_at == Some(self.steps) {
+        if self.config.squeeze_views == 0 || self.squeezed.is_some_and(|(at, _)| at == self.steps) {
             return false;
         }
-        self.squeezed_at = Some(self.steps);
-        self.squeeze_until = self.steps + self.config.squeeze_views - 1;
+        self.squeezed = Some((self.steps, true));
         self.rebuild_obstacles(pose, goal, false);
         self.waypoints.clear();
         if self.motion_to_goal(pose.position(), goal.position) {
@@ -751,7 +749,7 @@ impl RoverBug {
             self.mode = Mode::MotionToGoal;
             return true;
         }
-        self.squeeze_until = 0;
+        self.squeezed = Some((self.steps, false));
         self.rebuild_obstacles(pose, goal, false);
         false
     }
