@@ -93,8 +93,10 @@ impl Plan {
         let y = &spec.yard;
         for k in 0..spec.trials {
             let mut rng = trial_rng(spec.seed, k as u64);
-            // 32-bit seeds: exact in every JSON reader and short to type after `--seed`.
-            let seed = u64::from(rng.next_u32());
+            // 32-bit seeds: exact in every JSON reader and short to type after `--seed`. Drawn
+            // even when the file gives the seeds, so that the yard's draws stay the same.
+            let drawn = u64::from(rng.next_u32());
+            let seed = spec.first_terrain_seed.map_or(drawn, |first| first + k as u64);
             let rock_abundance = y.rock_abundance.sample(&mut rng);
             let slope_deg = y.slope_deg.sample(&mut rng);
             let relief_m = y.relief_m.sample(&mut rng);
@@ -382,6 +384,27 @@ mod tests {
         assert_eq!(a.trials[..], b.trials[..3]);
         let seeds: std::collections::BTreeSet<u64> = b.trials.iter().map(|t| t.seed).collect();
         assert_eq!(seeds.len(), 8, "every trial has its own terrain seed");
+    }
+
+    #[test]
+    fn first_terrain_seed_gives_the_yards_of_the_run_command() {
+        let p = Plan::new(spec("first_terrain_seed = 7\ntrials = 3\nnavigators = [\"roverbug\"]")).unwrap();
+        assert_eq!(p.trials.iter().map(|t| t.seed).collect::<Vec<_>>(), [7, 8, 9]);
+        // `rovernav run --seed 8` runs the default mission with seed 8.
+        let mut run = Mission::default_mission();
+        run.seed = 8;
+        let (m, _) = p.mission(&p.jobs()[1]);
+        assert_eq!(
+            (&m.terrain, &m.start, &m.goal, m.seed, m.time_limit_s, m.max_cycles, &m.localizer),
+            (&run.terrain, &run.start, &run.goal, run.seed, run.time_limit_s, run.max_cycles, &run.localizer)
+        );
+        // The yard's draws do not depend on where the seeds come from.
+        let drawn = Plan::new(spec("trials = 3\n[yard]\nrock_abundance = [0.05, 0.1, 0.2]")).unwrap();
+        let given =
+            Plan::new(spec("first_terrain_seed = 7\ntrials = 3\n[yard]\nrock_abundance = [0.05, 0.1, 0.2]"))
+                .unwrap();
+        let abundances = |p: &Plan| p.trials.iter().map(|t| t.rock_abundance).collect::<Vec<_>>();
+        assert_eq!(abundances(&drawn), abundances(&given));
     }
 
     #[test]

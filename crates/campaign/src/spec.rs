@@ -28,6 +28,12 @@ pub struct CampaignSpec {
     /// Number of procedural yards.
     #[serde(default = "default_trials")]
     pub trials: usize,
+    /// Terrain seed of the first yard, the next yard taking the next seed, instead of seeds
+    /// drawn from the campaign seed: with the default yard, trial k is then the yard of
+    /// `rovernav run --seed <first_terrain_seed + k>` (the yard's draws still come from the
+    /// campaign seed).
+    #[serde(default)]
+    pub first_terrain_seed: Option<u64>,
     /// Navigator registry names, or `["all"]` for every registered navigator.
     #[serde(default = "default_navigators")]
     pub navigators: Vec<String>,
@@ -256,6 +262,15 @@ impl CampaignSpec {
         if self.trials > 100_000 {
             return bad("trials", "at most 100000 procedural yards".into());
         }
+        // Seeds stay within 32 bits, as drawn ones do: exact in every JSON reader.
+        if let Some(first) = self.first_terrain_seed
+            && first.saturating_add(self.trials as u64) > u64::from(u32::MAX) + 1
+        {
+            return bad(
+                "first_terrain_seed",
+                format!("{first} + {} trials runs past the largest terrain seed {}", self.trials, u32::MAX),
+            );
+        }
         if self.navigators.is_empty() {
             return bad("navigators", "name at least one navigator (or \"all\")".into());
         }
@@ -372,7 +387,7 @@ mod tests {
     fn builtin_and_shipped_campaigns_parse() {
         let b = CampaignSpec::builtin();
         assert_eq!(b.navigator_names().len(), rovernav_navigation::NAVIGATOR_NAMES.len());
-        for file in ["quick.toml", "full.toml", "default.toml"] {
+        for file in ["quick.toml", "full.toml", "default.toml", "roverbug-yard.toml"] {
             let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../campaigns").join(file);
             let spec = CampaignSpec::from_file(&path).unwrap_or_else(|e| panic!("{e}"));
             assert!(spec.trials > 0, "{file}");
@@ -426,6 +441,7 @@ mod tests {
             ("time_limit_s = -1.0", "time_limit_s"),
             ("[yard]\nsize_m = 10.0\ngoal = [9.5, 5.0]", "yard.goal"),
             ("trials = 0", "trials"),
+            ("first_terrain_seed = 4294967290\ntrials = 7", "first_terrain_seed"),
             ("[[dem]]\nmission = \"m.toml\"\ntrials = 0", "dem[0].trials"),
         ] {
             let e = err(text);
