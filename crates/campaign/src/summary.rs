@@ -41,6 +41,18 @@ pub fn percentile(values: &[f64], q: f64) -> Option<f64> {
     Some(v[rank.min(v.len()) - 1])
 }
 
+/// Median of `values` (the mean of the two middle values for an even count), if any.
+pub fn median(values: &[f64]) -> Option<f64> {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
+}
+
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
     let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
     (n > 0).then(|| sum / n as f64)
@@ -98,6 +110,9 @@ pub struct NavigatorSummary {
     pub path_ratio_runs: usize,
     /// Mean of distance driven / optimal length.
     pub path_ratio_mean: Option<f64>,
+    /// Median of the path ratio (the mean of the two middle values for an even count): a few
+    /// long detours set the mean.
+    pub path_ratio_median: Option<f64>,
     /// 95th percentile (nearest rank) of the path ratio.
     pub path_ratio_p95: Option<f64>,
     /// Range images per metre driven (totals over all runs).
@@ -251,6 +266,7 @@ fn navigator_summary(name: &str, rows: &[&Row]) -> NavigatorSummary {
         outcomes,
         path_ratio_runs: ratios.len(),
         path_ratio_mean: mean(ratios.iter().copied()),
+        path_ratio_median: median(&ratios),
         path_ratio_p95: percentile(&ratios, 0.95),
         sensing_per_m: (driven > 0.0).then(|| sensed as f64 / driven),
         goal_error_mean_m: mean(rows.iter().map(|r| r.goal_error_m)),
@@ -323,8 +339,8 @@ impl Summary {
     /// The main table, one row per navigator (deterministic).
     pub fn main_table(&self) -> String {
         let mut s = String::from(
-            "| navigator | runs | success (95 % CI) | reached | hazard contacts | path ratio mean | path ratio p95 | sensing / m | goal error mean (m) | loc. error mean (m) | cycles mean | outcomes |\n\
-             |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
+            "| navigator | runs | success (95 % CI) | reached | hazard contacts | path ratio mean | path ratio median | path ratio p95 | sensing / m | goal error mean (m) | loc. error mean (m) | cycles mean | outcomes |\n\
+             |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
         );
         for n in &self.navigators {
             let ci =
@@ -332,7 +348,7 @@ impl Summary {
             let outcomes: Vec<String> = n.outcomes.iter().map(|(k, v)| format!("{k} {v}")).collect();
             let _ = writeln!(
                 s,
-                "| {} | {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 n.navigator,
                 n.runs,
                 pct(n.success_rate),
@@ -340,6 +356,7 @@ impl Summary {
                 pct(n.reached_rate),
                 n.hazard_contacts,
                 num(n.path_ratio_mean, 3),
+                num(n.path_ratio_median, 3),
                 num(n.path_ratio_p95, 3),
                 num(n.sensing_per_m, 2),
                 num(n.goal_error_mean_m, 2),
@@ -523,6 +540,10 @@ mod tests {
         let ratios = [1.0, 1.1, 1.2, 1.4, 1.5, 1.6, 1.8];
         assert!((nat.path_ratio_mean.unwrap() - ratios.iter().sum::<f64>() / 7.0).abs() < 1e-12);
         assert!((nat.path_ratio_p95.unwrap() - 1.8).abs() < 1e-12);
+        assert!((nat.path_ratio_median.unwrap() - 1.4).abs() < 1e-12);
+        // An even count takes the mean of the two middle values.
+        assert_eq!(median(&[1.6, 1.0, 1.2, 3.0]), Some(1.4));
+        assert_eq!(median(&[]), None);
         // 7 range images per run over 90 + 36 m.
         assert!((nat.sensing_per_m.unwrap() - 63.0 / 126.0).abs() < 1e-12);
         assert_eq!(s.failures.len(), 3 + 3);
