@@ -22,7 +22,8 @@ pub struct CampaignSpec {
     /// Name (the default output folder is `out/campaign-<name>`).
     #[serde(default = "default_name")]
     pub name: String,
-    /// Campaign seed: every trial's terrain seed and draws derive from it.
+    /// Campaign seed: every trial's draws, and its terrain seed unless `first_terrain_seed` is
+    /// given, derive from it.
     #[serde(default = "default_seed")]
     pub seed: u64,
     /// Number of procedural yards.
@@ -442,10 +443,20 @@ mod tests {
             ("[yard]\nsize_m = 10.0\ngoal = [9.5, 5.0]", "yard.goal"),
             ("trials = 0", "trials"),
             ("first_terrain_seed = 4294967290\ntrials = 7", "first_terrain_seed"),
+            ("first_terrain_seed = 4294967295\ntrials = 2", "first_terrain_seed"),
             ("[[dem]]\nmission = \"m.toml\"\ntrials = 0", "dem[0].trials"),
         ] {
             let e = err(text);
             assert!(e.contains("c.toml") && e.contains(&format!("`{field}`")), "{text}: {e}");
+        }
+    }
+
+    #[test]
+    fn terrain_seeds_may_end_at_the_largest_32_bit_seed() {
+        for text in
+            ["first_terrain_seed = 4294967290\ntrials = 6", "first_terrain_seed = 4294967295\ntrials = 1"]
+        {
+            CampaignSpec::from_toml(text, "c.toml").unwrap_or_else(|e| panic!("{text}: {e}"));
         }
     }
 

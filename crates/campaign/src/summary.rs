@@ -66,6 +66,10 @@ pub struct Summary {
     pub campaign: String,
     /// Campaign seed.
     pub seed: u64,
+    /// First and last terrain seed of the procedural yards when the campaign file gives them
+    /// (`first_terrain_seed`) rather than drawing them from the campaign seed.
+    #[serde(default)]
+    pub terrain_seeds: Option<[u64; 2]>,
     /// The slice these rows are, `i/n`, or `None` for a whole campaign.
     pub shard: Option<String>,
     /// Distinct trials (terrains) in the rows.
@@ -226,6 +230,11 @@ pub fn summarise(meta: &CampaignMeta, rows: &[Row]) -> (Summary, MachineSummary)
     let summary = Summary {
         campaign: meta.spec.name.clone(),
         seed: meta.spec.seed,
+        terrain_seeds: meta
+            .spec
+            .first_terrain_seed
+            .filter(|_| meta.spec.trials > 0)
+            .map(|first| [first, first + meta.spec.trials as u64 - 1]),
         shard: meta.shard.map(|s| s.to_string()),
         terrains: terrains.len(),
         runs: rows.len(),
@@ -392,11 +401,12 @@ impl Summary {
     /// The deterministic part of `summary.md`.
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "# Campaign `{}` (seed {}{})\n\n{} terrains, {} runs. Success: outcome `reached` with 0 hazard contacts; \
+            "# Campaign `{}` (seed {}{}{})\n\n{} terrains, {} runs. Success: outcome `reached` with 0 hazard contacts; \
              95 % interval: Wilson score. Path ratio: distance driven / optimal length (Field D* on the true \
              terrain), over reached runs. Sensing / m: range images per metre driven.\n\n",
             self.campaign,
             self.seed,
+            self.terrain_seeds.map_or(String::new(), |[a, b]| format!(", terrain seeds {a}-{b}")),
             self.shard.as_ref().map_or(String::new(), |s| format!(", shard {s}")),
             self.terrains,
             self.runs,
@@ -541,6 +551,8 @@ mod tests {
         assert!((nat.path_ratio_mean.unwrap() - ratios.iter().sum::<f64>() / 7.0).abs() < 1e-12);
         assert!((nat.path_ratio_p95.unwrap() - 1.8).abs() < 1e-12);
         assert!((nat.path_ratio_median.unwrap() - 1.4).abs() < 1e-12);
+        let cells: Vec<usize> = s.main_table().lines().map(|l| l.matches('|').count()).collect();
+        assert!(cells.iter().all(|&c| c == cells[0]) && cells.len() == 4, "{cells:?}");
         // An even count takes the mean of the two middle values.
         assert_eq!(median(&[1.6, 1.0, 1.2, 3.0]), Some(1.4));
         assert_eq!(median(&[]), None);

@@ -43,7 +43,8 @@ struct RunArgs {
     /// Navigators, comma-separated registry names, or `all` (overrides the file's list).
     #[arg(long, value_delimiter = ',')]
     navigators: Option<Vec<String>>,
-    /// Campaign seed (overrides the file's): every trial's terrain and draws derive from it.
+    /// Campaign seed (overrides the file's): every trial's draws, and its terrain seed unless the
+    /// file gives `first_terrain_seed`, derive from it.
     #[arg(long)]
     seed: Option<u64>,
     /// Run only slice i of n (1-based, e.g. 2/4) of the (trial, navigator) jobs.
