@@ -4,7 +4,8 @@
 //! A campaign file ([`spec`]) says how many procedural Mars yards to make and how their rock
 //! abundance, slope and relief vary, which real-DEM missions to add, and which navigators to
 //! run. [`plan`] turns it into trials, each with its own terrain seed drawn from the campaign
-//! seed (or given by the file), and a flat list of (trial, navigator) jobs that `--shard i/n` slices for job arrays.
+//! seed (or given by the file), and a flat list of (trial, navigator) jobs that `--shard i/n`
+//! slices for job arrays.
 //! [`runner`] runs the jobs in parallel, [`row`] keeps one row per run, [`summary`] reduces
 //! the rows per navigator (success with a Wilson interval, path ratio, sensing per metre,
 //! compute per cycle), [`plots`] draws SVG charts and [`output`] writes and merges output
