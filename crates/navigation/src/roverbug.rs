@@ -82,6 +82,11 @@
 //!   turns go the long way round when only that is clear, and a rover that cannot turn in place
 //!   at all backs out straight before giving up.
 //!
+//! * the goal is a region, as the mission gives it: points on the circle of 0.8 times the goal
+//!   tolerance around it, sensed and outside every C-obstacle, are LTG nodes that end a path at
+//!   no cost (like the vertices of a C-obstacle containing the goal) when the rover reaches
+//!   them by a free sensed segment.
+//!
 //! Mission keep-out polygons are C-obstacles like sensed ones (their hulls, grown alike).
 
 use crate::terrain_model::{HAZARD_MARGIN, T_GRID_RESOLUTION, TOP_HAZARD_MARGIN};
@@ -92,6 +97,12 @@ use rovernav_core::{
 use rovernav_perception::{CObstacle, HazardHeight, SensedWedge, TerrainConfig, TerrainEvaluator};
 use std::collections::VecDeque;
 use std::f64::consts::PI;
+
+/// Fraction of the goal tolerance within which LTG nodes count as arrival: short of the
+/// tolerance itself, so that drive error still ends the subpath within it.
+const ARRIVAL_FRACTION: f64 = 0.8;
+/// Points on the circle of arrival around the goal offered to the LTG as nodes.
+const ARRIVAL_POINTS: usize = 16;
 
 /// Tunable parameters of RoverBug.
 #[derive(Clone, Debug)]
@@ -194,8 +205,9 @@ struct Node {
     p: Point2,
     /// (obstacle, vertex) for C-obstacle vertices.
     vertex: Option<(usize, usize)>,
-    /// A vertex of the C-obstacle containing the goal.
-    goal_vertex: bool,
+    /// Reaching the node is arrival: a vertex of the C-obstacle containing the goal, or a point
+    /// within the goal's tolerance.
+    arrival: bool,
 }
 
 /// The local tangent graph LTG(S) within the sensed region S.
@@ -254,6 +266,8 @@ pub struct RoverBug {
     /// The step (sensing position) at which a squeeze was last tried, and whether it found a
     /// way on: then C-obstacles go without the safety buffer for `squeeze_views` steps.
     squeezed: Option<(u32, bool)>,
+    /// Distance from the goal within which the rover has arrived (m; from the goal given).
+    goal_tolerance: f64,
     waypoints: VecDeque<Point2>,
     subpath: Vec<Point2>,
     finish: Option<(Outcome, String)>,
@@ -303,6 +317,7 @@ impl RoverBug {
             escapes: (0, Point2::new(f64::NAN, f64::NAN)),
             last_motion: None,
             drive_from: None,
+            goal_tolerance: 0.0,
             waypoints: VecDeque::new(),
             subpath: Vec::new(),
             finish: None,
@@ -421,7 +436,7 @@ impl RoverBug {
 
     /// Builds the local tangent graph from the rover at `x` toward the goal `goal`.
     fn build_ltg(&self, x: Point2, goal: Point2) -> Ltg {
-        let mut nodes = vec![Node { p: x, vertex: None, goal_vertex: false }];
+        let mut nodes = vec![Node { p: x, vertex: None, arrival: false }];
         // T_g: toward the goal when nothing visible blocks the direct line.
         let to_goal = goal.sub(x);
         let dist = to_goal.norm();
@@ -430,16 +445,31 @@ impl RoverBug {
             let reach = dist.min(self.range());
             let tg = x.add(to_goal.scale(reach / dist));
             if self.segment_free(x, tg, x) && self.segment_visible(x, tg) {
-                nodes.push(Node { p: tg, vertex: None, goal_vertex: false });
+                nodes.push(Node { p: tg, vertex: None, arrival: false });
+            }
+        }
+        // The goal is a region: points well inside its tolerance are arrival too, so that a
+        // rock beside the goal point does not send the rover round it (seed 17 of the default
+        // yard gave up 1.04 m from the goal and drove on for 50 m). They join the rover only,
+        // by a sensed segment: ground beyond the cut radius counts as free, and a path through
+        // it must not reach them (a goal inside a ring of rocks).
+        let arrive = ARRIVAL_FRACTION * self.goal_tolerance;
+        if arrive > 0.0 && dist > arrive && dist < self.cut_radius() + arrive {
+            for k in 0..ARRIVAL_POINTS {
+                let a = 2.0 * PI * k as f64 / ARRIVAL_POINTS as f64;
+                let p = goal.add(Point2::new(a.cos(), a.sin()).scale(arrive));
+                if self.visible(p) && !self.obstacles.iter().any(|o| o.contains(p)) {
+                    nodes.push(Node { p, vertex: None, arrival: true });
+                }
             }
         }
         for (k, o) in self.obstacles.iter().enumerate() {
-            let goal_vertex = o.contains(goal);
+            let around_goal = o.contains(goal);
             for (i, &v) in o.vertices.iter().enumerate() {
                 let inside_other =
                     self.obstacles.iter().enumerate().any(|(j, q)| j != k && q.contains_strict(v));
                 if !inside_other && self.visible_or_beyond_cut(v) {
-                    nodes.push(Node { p: v, vertex: Some((k, i)), goal_vertex });
+                    nodes.push(Node { p: v, vertex: Some((k, i)), arrival: around_goal });
                 }
             }
         }
@@ -449,6 +479,12 @@ impl RoverBug {
             for j in i + 1..n {
                 let (a, b) = (nodes[i].p, nodes[j].p);
                 if a.dist(b) < 1e-9 || !self.tangent(&nodes[i], b) || !self.tangent(&nodes[j], a) {
+                    continue;
+                }
+                let on_circle = |n: &Node| n.arrival && n.vertex.is_none();
+                if (on_circle(&nodes[i]) || on_circle(&nodes[j]))
+                    && (i != 0 || !(0..=8).all(|k| self.visible(a.add(b.sub(a).scale(k as f64 / 8.0)))))
+                {
                     continue;
                 }
                 let (a, b) = if j == 0 { (b, a) } else { (a, b) };
@@ -482,9 +518,9 @@ impl RoverBug {
     /// sequence without the virtual goal.
     fn search(&self, ltg: &Ltg, goal: Point2, allowed: &dyn Fn(&Node) -> bool) -> Option<Vec<usize>> {
         let clear =
-            |node: &Node| node.goal_vertex || self.obstacles.iter().all(|o| !o.blocks_segment(node.p, goal));
+            |node: &Node| node.arrival || self.obstacles.iter().all(|o| !o.blocks_segment(node.p, goal));
         self.search_with(ltg, goal, &|_, node: &Node| {
-            (allowed(node) && clear(node)).then(|| if node.goal_vertex { 0.0 } else { node.p.dist(goal) })
+            (allowed(node) && clear(node)).then(|| if node.arrival { 0.0 } else { node.p.dist(goal) })
         })
     }
 
@@ -810,7 +846,7 @@ impl RoverBug {
     fn motion_to_goal(&mut self, x: Point2, goal: Point2) -> bool {
         let ltg = self.build_ltg(x, goal);
         let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
-        let Some(path) = self.search(&ltg, goal, &|n: &Node| n.goal_vertex || n.p.dist(goal) <= bound + 1e-9)
+        let Some(path) = self.search(&ltg, goal, &|n: &Node| n.arrival || n.p.dist(goal) <= bound + 1e-9)
         else {
             return false;
         };
@@ -1355,7 +1391,7 @@ impl RoverBug {
         let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
         let limit = d_reach - self.config.leave_margin;
         if let Some(path) = self.search(&ltg, goal, &|n: &Node| {
-            n.goal_vertex || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < limit)
+            n.arrival || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < limit)
         }) {
             let end = ltg.nodes[*path.last().expect("non-empty path")];
             self.d_leave = Some(end.p.dist(goal));
@@ -1512,6 +1548,7 @@ impl Navigator for RoverBug {
         if let Some((outcome, why)) = self.finish.clone() {
             return NavCommand::Finish(outcome, why);
         }
+        self.goal_tolerance = input.goal.tolerance;
         if x.dist(goal) <= input.goal.tolerance {
             return NavCommand::Finish(Outcome::Reached, format!("within {:.2} m of the goal", x.dist(goal)));
         }
@@ -1670,6 +1707,31 @@ mod tests {
         let len: f64 = pts.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>() + pts.last().unwrap().dist(goal);
         let expect = 2.0f64.hypot(0.5) + 1.0 + 1.0f64.hypot(0.5);
         assert!((len - expect).abs() < 1e-3, "{len} vs {expect}: {pts:?}");
+    }
+
+    #[test]
+    fn a_rock_beside_the_goal_ends_the_path_within_the_goal_tolerance() {
+        // Square [2.2,2.8]x[-0.3,0.3] just before the goal (3, 0): around it to the goal point
+        // is |(2.2,0.3)| + 0.6 + |(0.2,0.3)| = 3.1809 m; with a 1 m tolerance the path ends on
+        // the arrival circle (0.8 m) without passing the rock.
+        let mut bug = bug_with(vec![square(2.5, 0.0, 0.3)]);
+        let goal = Point2::new(3.0, 0.0);
+        let x = Point2::new(0.0, 0.0);
+        let around = 2.2f64.hypot(0.3) + 0.6 + 0.2f64.hypot(0.3);
+        let length = |bug: &RoverBug| {
+            let ltg = bug.build_ltg(x, goal);
+            let path = bug.search(&ltg, goal, &|_| true).expect("path");
+            let pts: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
+            let end = *pts.last().unwrap();
+            let rest = if ltg.nodes[*path.last().unwrap()].arrival { 0.0 } else { end.dist(goal) };
+            (pts.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>() + rest, end)
+        };
+        let (len, _) = length(&bug);
+        assert!((len - around).abs() < 1e-3, "without a tolerance: {len} vs {around}");
+        bug.goal_tolerance = 1.0;
+        let (len, end) = length(&bug);
+        assert!(end.dist(goal) <= 0.8 + 1e-9, "ends {} m from the goal", end.dist(goal));
+        assert!(len >= x.dist(goal) - 0.8 - 1e-9 && len < around - 0.5, "{len}");
     }
 
     #[test]
