@@ -116,6 +116,14 @@ impl MissionToRun {
 }
 
 fn main() -> ExitCode {
+    // A reader that closes the pipe early (`rovernav run | head -1`) ends the output, as it does
+    // for any command-line tool, instead of a panic in `println!`. The run's files are written
+    // before anything is printed.
+    #[cfg(unix)]
+    // SAFETY: sets the default disposition of one signal before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         None => run(RunArgs::default()),

@@ -98,3 +98,22 @@ fn unknown_command_fails() {
     assert!(!out.status.success());
     assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
 }
+
+#[cfg(unix)]
+#[test]
+fn broken_pipe_on_stdout_panicked_in_println() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    // The reader goes away before the first line is printed (`rovernav ... | head -0`).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
+        .args(["eval", "terrain", "--seeds", "1"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("binary ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert!(out.status.success() || out.status.signal() == Some(libc::SIGPIPE), "{:?}: {stderr}", out.status);
+}
