@@ -425,14 +425,18 @@ impl RoverBug {
 
     /// Whether the segment lies in the sensed region up to the cut radius.
     fn segment_visible(&self, a: Point2, b: Point2) -> bool {
-        let n = (a.dist(b) / 0.2).ceil().max(1.0) as usize;
-        (0..=n).all(|i| self.visible_or_beyond_cut(a.add(b.sub(a).scale(i as f64 / n as f64))))
+        Self::along(a, b, |p| self.visible_or_beyond_cut(p))
     }
 
     /// Whether the segment lies in the sensed region, even beyond the cut radius.
     fn segment_sensed(&self, a: Point2, b: Point2) -> bool {
+        Self::along(a, b, |p| self.visible(p))
+    }
+
+    /// Whether `holds` is true at points every 0.2 m (at most) along the segment, ends included.
+    fn along(a: Point2, b: Point2, holds: impl Fn(Point2) -> bool) -> bool {
         let n = (a.dist(b) / 0.2).ceil().max(1.0) as usize;
-        (0..=n).all(|i| self.visible(a.add(b.sub(a).scale(i as f64 / n as f64))))
+        (0..=n).all(|i| holds(a.add(b.sub(a).scale(i as f64 / n as f64))))
     }
 
     /// Whether segment a-b is free of every C-obstacle interior. The rover at `x` may find
