@@ -104,15 +104,16 @@ fn unknown_command_fails() {
 fn broken_pipe_on_stdout_panicked_in_println() {
     use std::os::unix::process::ExitStatusExt;
     use std::process::Stdio;
-    // The reader goes away before the first line is printed (`rovernav ... | head -0`).
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
+    // The reader is gone before the child starts (`rovernav ... | head -0`), so its first line
+    // meets a closed pipe whatever the timing.
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_rovernav"))
         .args(["eval", "terrain", "--seeds", "1"])
-        .stdout(Stdio::piped())
+        .stdout(Stdio::from(writer))
         .stderr(Stdio::piped())
-        .spawn()
+        .output()
         .expect("binary runs");
-    drop(child.stdout.take());
-    let out = child.wait_with_output().expect("binary ends");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "panic: {stderr}");
     assert!(out.status.success() || out.status.signal() == Some(libc::SIGPIPE), "{:?}: {stderr}", out.status);
