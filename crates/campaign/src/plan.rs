@@ -197,6 +197,8 @@ impl Plan {
         let (mission, origin) = &self.missions[job.trial];
         let mut mission = mission.clone();
         mission.navigator = self.navigators[job.navigator].clone();
+        mission.navigator_params =
+            self.spec.navigator_params.get(&mission.navigator).cloned().unwrap_or_default();
         (mission, origin)
     }
 
@@ -215,6 +217,14 @@ impl Plan {
             return None;
         };
         let craters = craters_per_hectare.map_or(String::new(), |c| format!("craters_per_hectare = {c:?}\n"));
+        let nav = self.navigators.first().map_or("astar-grid", String::as_str);
+        let params = match self.spec.navigator_params.get(nav) {
+            Some(p) if !p.is_empty() => {
+                let lines: String = p.iter().map(|(k, v)| format!("{k} = {v:?}\n")).collect();
+                format!("\n[navigator_params]\n{lines}")
+            }
+            _ => String::new(),
+        };
         Some(format!(
             "# Trial {trial} of campaign `{campaign}` (campaign seed {cseed}).\n\
              name = \"{name}\"\nseed = {seed}\nnavigator = \"{nav}\"\nlocalizer = \"{loc}\"\n\
@@ -222,12 +232,11 @@ impl Plan {
              [terrain]\nkind = \"procedural\"\nsize_m = {size_m:?}\nresolution_m = {resolution_m:?}\n\
              rock_abundance = {rock_abundance:?}\nrelief_m = {relief_m:?}\nslope_deg = {slope_deg:?}\n{craters}\n\
              [start]\nx = {sx:?}\ny = {sy:?}\nyaw_deg = {yaw:?}\n\n\
-             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n",
+             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n{params}",
             campaign = self.spec.name,
             cseed = self.spec.seed,
             name = m.name,
             seed = m.seed,
-            nav = self.navigators.first().map_or("astar-grid", String::as_str),
             loc = m.localizer,
             tl = m.time_limit_s,
             mc = m.max_cycles,
@@ -404,6 +413,33 @@ mod tests {
         let slopes = |p: &Plan| p.trials.iter().map(|t| t.slope_deg).collect::<Vec<_>>();
         assert_eq!(slopes(&drawn), slopes(&given));
         assert!(slopes(&given).windows(2).all(|w| w[0] != w[1]), "drawn per trial");
+    }
+
+    #[test]
+    fn navigator_params_go_to_their_navigator_s_runs_and_trial_files() {
+        let p = Plan::new(spec(
+            "trials = 1\nnavigators = [\"roverbug\", \"nat\"]\n[navigator_params.roverbug]\nmax_wedges = 50\nsafety_clearance_margin = 0.8",
+        ))
+        .unwrap();
+        let jobs = p.jobs();
+        let (bug, _) = p.mission(&jobs[0]);
+        let (nat, _) = p.mission(&jobs[1]);
+        assert_eq!(
+            bug.navigator_params,
+            [("max_wedges".into(), 50.0), ("safety_clearance_margin".into(), 0.8)].into()
+        );
+        assert!(nat.navigator_params.is_empty());
+        let back = Mission::from_toml(&p.mission_toml(0).unwrap(), "trial.toml").unwrap();
+        assert_eq!(back, bug);
+        for (bad, field) in [
+            ("[navigator_params.sr2]\nleg_m = 2.0", "navigator_params.sr2"),
+            ("[navigator_params.roverbug]\nwedges = 2", "navigator_params.roverbug.wedges"),
+            ("[navigator_params.roverbug]\nmax_steps = -3", "navigator_params.roverbug.max_steps"),
+        ] {
+            let text = format!("trials = 1\nnavigators = [\"roverbug\"]\n{bad}");
+            let err = CampaignSpec::from_toml(&text, "c.toml").unwrap_err().to_string();
+            assert!(err.contains("c.toml") && err.contains(field), "{field}: {err}");
+        }
     }
 
     #[test]

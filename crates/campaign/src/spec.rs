@@ -38,6 +38,10 @@ pub struct CampaignSpec {
     /// Navigator registry names, or `["all"]` for every registered navigator.
     #[serde(default = "default_navigators")]
     pub navigators: Vec<String>,
+    /// Parameters per navigator (`[navigator_params.<name>]`, as a mission's
+    /// `[navigator_params]`); a navigator without an entry keeps its defaults.
+    #[serde(default)]
+    pub navigator_params: std::collections::BTreeMap<String, rovernav_navigation::NavigatorParams>,
     /// Localiser registry name used by every run.
     #[serde(default = "default_localizer")]
     pub localizer: String,
@@ -288,6 +292,25 @@ impl CampaignSpec {
         for (i, name) in names.iter().enumerate() {
             if names[..i].contains(name) {
                 return bad("navigators", format!("`{name}` is listed twice"));
+            }
+        }
+        for (name, params) in &self.navigator_params {
+            if !names.contains(name) {
+                return bad(
+                    &format!("navigator_params.{name}"),
+                    format!("`{name}` is not among the campaign's navigators ({})", names.join(", ")),
+                );
+            }
+            let rover = rovernav_core::RoverConfig::default();
+            if let Err(e) = rovernav_navigation::navigator_with_params(name, &rover, params) {
+                let field = match &e {
+                    rovernav_navigation::NavigatorError::UnknownParam { param, .. }
+                    | rovernav_navigation::NavigatorError::InvalidParam { param, .. } => {
+                        format!("navigator_params.{name}.{param}")
+                    }
+                    _ => format!("navigator_params.{name}"),
+                };
+                return bad(&field, e.to_string());
             }
         }
         let localizers = rovernav_localization::LOCALIZER_NAMES;

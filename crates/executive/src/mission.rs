@@ -22,6 +22,10 @@ pub struct Mission {
     /// Registry name of the navigator.
     #[serde(default = "default_navigator")]
     pub navigator: String,
+    /// Parameters of the navigator (`[navigator_params]`, names and units as `rovernav
+    /// navigators` lists them); unset ones keep the navigator's defaults.
+    #[serde(default)]
+    pub navigator_params: rovernav_navigation::NavigatorParams,
     /// Registry name of the localiser.
     #[serde(default = "default_localizer")]
     pub localizer: String,
@@ -320,6 +324,25 @@ pub enum MissionError {
     },
 }
 
+/// An invalid-field error with the line of the field's key in `text` when one line holds it.
+fn with_line(error: MissionError, text: &str) -> MissionError {
+    let MissionError::Invalid { path, field, message } = error else { return error };
+    let key = field.rsplit('.').next().unwrap_or(&field).split('[').next().unwrap_or_default();
+    let lines: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            l.trim_start().strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map(|(i, _)| i + 1)
+        .collect();
+    let message = match lines.as_slice() {
+        [line] if !key.is_empty() => format!("line {line}: {message}"),
+        _ => message,
+    };
+    MissionError::Invalid { path, field, message }
+}
+
 impl Mission {
     /// Parses mission text; `origin` names the source in error messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, MissionError> {
@@ -332,7 +355,7 @@ impl Mission {
             message.push_str(&e.message().replace('\n', " "));
             MissionError::Parse { path: origin.into(), message }
         })?;
-        mission.validate(origin)?;
+        mission.validate(origin).map_err(|e| with_line(e, text))?;
         Ok(mission)
     }
 
@@ -417,6 +440,23 @@ impl Mission {
         }
         if !positive(self.goal.tolerance_m) {
             return bad("goal.tolerance_m", "must be positive");
+        }
+        // An unknown navigator name is the run's error (it lists the registered ones).
+        if rovernav_navigation::navigator_params(&self.navigator).is_some()
+            && let Err(e) = rovernav_navigation::navigator_with_params(
+                &self.navigator,
+                &rovernav_core::RoverConfig::default(),
+                &self.navigator_params,
+            )
+        {
+            let field = match &e {
+                rovernav_navigation::NavigatorError::UnknownParam { param, .. }
+                | rovernav_navigation::NavigatorError::InvalidParam { param, .. } => {
+                    format!("navigator_params.{param}")
+                }
+                _ => "navigator".to_string(),
+            };
+            return bad(&field, &e.to_string());
         }
         for (i, zone) in self.goal.keep_out.iter().enumerate() {
             if zone.len() < 3 {
@@ -608,6 +648,36 @@ mod tests {
                 .unwrap_err()
                 .to_string();
         assert!(err.contains("meteor") && err.contains("line "), "{err}");
+    }
+
+    #[test]
+    fn navigator_params_are_read_and_checked_against_the_navigator() {
+        let text = DEFAULT_MISSION_TOML.replace("\"astar-grid\"", "\"roverbug\"");
+        let m = Mission::from_toml(
+            &format!("{text}\n[navigator_params]\nsafety_buffer_m = 0.2\nmax_wedges = 40\n"),
+            "m.toml",
+        )
+        .unwrap();
+        assert_eq!(m.navigator_params.get("max_wedges"), Some(&40.0));
+        for (bad, field) in [
+            ("wedge_budget = 40", "navigator_params.wedge_budget"),
+            ("clearance_margin = 1.5", "navigator_params.clearance_margin"),
+            ("max_wedges = 2.5", "navigator_params.max_wedges"),
+        ] {
+            let full = format!("{text}\n[navigator_params]\n{bad}\n");
+            let line = full.lines().count();
+            let err = Mission::from_toml(&full, "m.toml").unwrap_err().to_string();
+            assert!(err.contains("m.toml") && err.contains(field), "{field}: {err}");
+            assert!(err.contains(&format!("line {line}:")), "{field}: {err}");
+        }
+        // Parameters are the named navigator's: astar-grid has no wedge budget.
+        let err = Mission::from_toml(
+            &format!("{DEFAULT_MISSION_TOML}\n[navigator_params]\nmax_wedges = 40\n"),
+            "m.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("astar-grid") && err.contains("max_wedges"), "{err}");
     }
 
     #[test]

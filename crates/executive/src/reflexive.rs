@@ -58,6 +58,8 @@ fn merge_frames(into: &mut SensorFrame, later: SensorFrame) {
 /// The navigator component: drives one leg (a `DriveTo`) at a time with a registered navigator.
 pub struct NavigatorComponent {
     registry_name: String,
+    /// Parameters of every instance (the mission's `[navigator_params]`).
+    params: rovernav_navigation::NavigatorParams,
     rover: RoverConfig,
     navigator: Box<dyn Navigator>,
     /// The navigator above has not driven a leg yet.
@@ -85,6 +87,7 @@ impl NavigatorComponent {
     pub fn new(navigator: Box<dyn Navigator>, registry_name: &str, rover: RoverConfig) -> Self {
         Self {
             registry_name: registry_name.to_string(),
+            params: Default::default(),
             rover,
             navigator,
             unused: true,
@@ -102,6 +105,12 @@ impl NavigatorComponent {
             frames: None,
             estimates: None,
         }
+    }
+
+    /// Later legs' instances take these parameters (those the first instance was built with).
+    pub fn with_params(mut self, params: rovernav_navigation::NavigatorParams) -> Self {
+        self.params = params;
+        self
     }
 
     /// The hosted navigator's name.
@@ -139,10 +148,12 @@ impl NavigatorComponent {
                 )?;
             }
             if !self.unused {
-                self.navigator = rovernav_navigation::navigator_by_name(&self.registry_name, &self.rover)
-                    .ok_or_else(|| {
-                        ComponentFault(format!("navigator `{}` not registered", self.registry_name))
-                    })?;
+                self.navigator = rovernav_navigation::navigator_with_params(
+                    &self.registry_name,
+                    &self.rover,
+                    &self.params,
+                )
+                .map_err(|e| ComponentFault(e.to_string()))?;
             }
             self.unused = false;
             self.leg = Some((d.task, d.goal.goal()));

@@ -44,6 +44,14 @@ pub enum RunError {
         /// Registered names.
         known: String,
     },
+    /// The mission's navigator parameters name an unknown parameter or an out-of-range value.
+    #[error("{origin}: field `navigator_params`: {message}")]
+    NavigatorParams {
+        /// Where the parameters came from.
+        origin: String,
+        /// Which parameter and why.
+        message: String,
+    },
     /// The mission names a localiser that is not registered.
     #[error("{origin}: field `localizer`: unknown localizer `{name}` (known: {known})")]
     UnknownLocalizer {
@@ -166,6 +174,8 @@ pub struct RunSettings {
     pub max_cycles: u64,
     /// Mission name for the report.
     pub name: String,
+    /// Navigator parameters (the mission's `[navigator_params]`).
+    pub navigator_params: rovernav_navigation::NavigatorParams,
 }
 
 impl RunSettings {
@@ -178,6 +188,7 @@ impl RunSettings {
             time_limit_s: mission.time_limit_s,
             max_cycles: mission.max_cycles,
             name: mission.name.clone(),
+            navigator_params: mission.navigator_params.clone(),
         }
     }
 }
@@ -471,14 +482,19 @@ pub(crate) fn algorithms(
     mission: &RunSettings,
     origin: &str,
 ) -> Result<(Box<dyn Navigator>, BoxedLocalizer), RunError> {
-    let navigator: Box<dyn Navigator> =
-        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).ok_or_else(|| {
-            RunError::UnknownNavigator {
-                origin: origin.into(),
-                name: mission.navigator.clone(),
-                known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
-            }
-        })?;
+    let navigator: Box<dyn Navigator> = rovernav_navigation::navigator_with_params(
+        &mission.navigator,
+        &world.rover,
+        &mission.navigator_params,
+    )
+    .map_err(|e| match e {
+        rovernav_navigation::NavigatorError::UnknownNavigator { name } => RunError::UnknownNavigator {
+            origin: origin.into(),
+            name,
+            known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
+        },
+        other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
+    })?;
     // A map-matching localiser needs views back over the terrain crossed (issue 5 item 5).
     let look_back = rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
     let navigator: Box<dyn Navigator> = if rovernav_localization::matches_terrain(&mission.localizer)
@@ -544,7 +560,10 @@ pub(crate) fn add_components(
     options: &RunOptions,
     platform: Box<dyn crate::components::Component>,
 ) -> Result<(), RuntimeError> {
-    runtime.add(Box::new(NavigatorComponent::new(navigator, &mission.navigator, rover.clone())))?;
+    runtime.add(Box::new(
+        NavigatorComponent::new(navigator, &mission.navigator, rover.clone())
+            .with_params(mission.navigator_params.clone()),
+    ))?;
     runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
     runtime.add(Box::new(MotionController::new()))?;
     runtime.add(platform)?;

@@ -40,3 +40,20 @@ fn seed_4_boxed_in_start_squeezes_out_without_contact() {
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert_eq!(r.hazard_contacts, 0);
 }
+
+/// The mission's `[navigator_params]` reach the navigator: a wedge budget RoverBug cannot reach
+/// the goal within ends the run with its help request after no more sensing than the budget
+/// allows, where the default budget reaches the goal.
+#[test]
+fn navigator_params_from_the_mission_set_roverbug_s_wedge_budget() {
+    let mut mission = Mission::default_mission();
+    mission.navigator = "roverbug".into();
+    mission.navigator_params = [("max_wedges".to_string(), 4.0)].into();
+    let run = run_mission(&mission, "default, 4 wedges", &mut |_| {}).expect("mission runs");
+    let r = &run.report;
+    assert_eq!(r.outcome, "help_requested", "{}", r.message);
+    assert!(r.message.contains("wedges sensed"), "{}", r.message);
+    // A request asked for under the budget may carry several wedges: at most 3 more.
+    assert!((4..=6).contains(&r.sensing_actions), "{} wedges", r.sensing_actions);
+    assert!(r.distance_driven_m < r.straight_line_m, "drove {} m", r.distance_driven_m);
+}

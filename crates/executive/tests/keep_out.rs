@@ -43,6 +43,7 @@ fn no_navigator_enters_a_keep_out_zone_across_its_way() {
             time_limit_s: 3600.0,
             max_cycles: 300,
             name: "keep-out".into(),
+            navigator_params: Default::default(),
         };
         let out =
             run_world(world, &settings, "keep-out scenario", &mut |_| {}).expect("registered navigator");

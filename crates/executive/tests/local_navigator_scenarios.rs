@@ -25,6 +25,7 @@ fn settings(navigator: &str, max_cycles: u64) -> RunSettings {
         time_limit_s: 20_000.0,
         max_cycles,
         name: "local-navigator-scenario".into(),
+        navigator_params: Default::default(),
     }
 }
 

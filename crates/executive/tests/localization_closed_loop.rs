@@ -23,6 +23,7 @@ fn final_error(world: World, localizer: &str, seed: u64) -> (f64, f64) {
         time_limit_s: 20_000.0,
         max_cycles: 2000,
         name: "localization-closed-loop".into(),
+        navigator_params: Default::default(),
     };
     let out = run_world(world, &settings, "localization scenario", &mut |_| {}).expect("registered names");
     (out.report.localization_error_m, out.report.distance_driven_m)

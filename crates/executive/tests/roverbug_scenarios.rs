@@ -32,6 +32,7 @@ fn run(size: (f64, f64), rocks: Vec<Rock>, start: Pose2, goal: Point2, tolerance
         time_limit_s: 3600.0,
         max_cycles: 3000,
         name: "roverbug-scenario".into(),
+        navigator_params: Default::default(),
     };
     run_world(world, &settings, "roverbug scenario", &mut |_| {}).expect("run")
 }

@@ -20,6 +20,7 @@
 //! and the mission's keep-out zones: the combination the paper credits with getting the rovers
 //! around wide obstacles and rock clusters where GESTALT alone fails (Spirit, sol 108).
 
+use crate::params::{Field, Param, Unit, map_params};
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
     DriveGuard, Goal, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay,
@@ -79,6 +80,62 @@ pub struct GestaltConfig {
     pub patience: u32,
 }
 
+impl GestaltConfig {
+    /// The parameters a mission file may set (`[navigator_params]`).
+    pub fn params() -> Vec<Param<Self>> {
+        use Unit::*;
+        let mut params: Vec<Param<Self>> = vec![
+            Param {
+                name: "step_m",
+                doc: "distance driven per cycle",
+                unit: PositiveMetres,
+                field: |c| Field::Real(&mut c.step),
+            },
+            Param {
+                name: "lookahead_m",
+                doc: "how far along each arc the votes look",
+                unit: PositiveMetres,
+                field: |c| Field::Real(&mut c.lookahead),
+            },
+            Param {
+                name: "hazard_weight",
+                doc: "weight of the hazard vote",
+                unit: Weight,
+                field: |c| Field::Real(&mut c.hazard_weight),
+            },
+            Param {
+                name: "steering_weight",
+                doc: "weight of the steering-bias vote",
+                unit: Weight,
+                field: |c| Field::Real(&mut c.steering_weight),
+            },
+            Param {
+                name: "waypoint_weight",
+                doc: "weight of the waypoint vote",
+                unit: Weight,
+                field: |c| Field::Real(&mut c.waypoint_weight),
+            },
+            Param {
+                name: "max_steps",
+                doc: "drive steps allowed before giving up (the step budget)",
+                unit: Count,
+                field: |c| Field::U32(&mut c.max_steps),
+            },
+            Param {
+                name: "patience",
+                doc: "drive and turn steps without getting 0.25 m closer to the goal before asking for help",
+                unit: Count,
+                field: |c| Field::U32(&mut c.patience),
+            },
+        ];
+        params.extend(map_params::<Self>(
+            |c| Field::Real(&mut c.map_resolution),
+            |c| Field::Real(&mut c.map_margin),
+            |c| Field::Real(&mut c.safety_buffer),
+        ));
+        params
+    }
+}
 impl Default for GestaltConfig {
     fn default() -> Self {
         Self {

@@ -16,6 +16,7 @@
 //! stops only where it can turn. A turn that becomes unsafe after new sensing is refused at
 //! execution and the rover retraces its latest motions to room to turn.
 
+use crate::params::{Field, Param, Unit, map_params, turn_threshold_param};
 use crate::terrain_model::{CostMode, TerrainModel, cells_in_disc};
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
@@ -46,6 +47,33 @@ pub struct GridNavigatorConfig {
     pub patience: u32,
 }
 
+impl GridNavigatorConfig {
+    /// The parameters a mission file may set (`[navigator_params]`).
+    pub fn params() -> Vec<Param<Self>> {
+        use Unit::*;
+        let mut params: Vec<Param<Self>> = vec![
+            Param {
+                name: "max_step_m",
+                doc: "longest distance driven between sensing stops",
+                unit: PositiveMetres,
+                field: |c| Field::Real(&mut c.max_step),
+            },
+            turn_threshold_param(|c| Field::Real(&mut c.turn_threshold)),
+            Param {
+                name: "patience",
+                doc: "planning cycles without getting closer to the goal before asking for help",
+                unit: Count,
+                field: |c| Field::U32(&mut c.patience),
+            },
+        ];
+        params.extend(map_params::<Self>(
+            |c| Field::Real(&mut c.map_resolution),
+            |c| Field::Real(&mut c.map_margin),
+            |c| Field::Real(&mut c.safety_buffer),
+        ));
+        params
+    }
+}
 impl Default for GridNavigatorConfig {
     fn default() -> Self {
         Self {

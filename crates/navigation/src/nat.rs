@@ -15,6 +15,7 @@
 //! rotated further in the spin direction until safe.
 
 use crate::gestalt::{arc_pose, keep_out_distance};
+use crate::params::{Field, Param, Unit, map_params, turn_threshold_param};
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
@@ -49,6 +50,57 @@ pub struct NatConfig {
     pub patience: u32,
 }
 
+impl NatConfig {
+    /// The parameters a mission file may set (`[navigator_params]`).
+    pub fn params() -> Vec<Param<Self>> {
+        use Unit::*;
+        let mut params: Vec<Param<Self>> = vec![
+            Param {
+                name: "step_m",
+                doc: "longest distance driven per cycle",
+                unit: PositiveMetres,
+                field: |c| Field::Real(&mut c.step),
+            },
+            Param {
+                name: "influence_m",
+                doc: "distance within which an obstacle's field acts",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.influence),
+            },
+            Param {
+                name: "gain",
+                doc: "strength of the obstacle fields relative to the unit goal attraction",
+                unit: Weight,
+                field: |c| Field::Real(&mut c.gain),
+            },
+            Param {
+                name: "spin_distance_m",
+                doc: "distance at which an obstacle's field is fully spun (tangential)",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.spin_distance),
+            },
+            Param {
+                name: "cluster_distance_m",
+                doc: "cells of the same spin cluster lie within this distance",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.cluster_distance),
+            },
+            turn_threshold_param(|c| Field::Real(&mut c.turn_threshold)),
+            Param {
+                name: "patience",
+                doc: "cycles without getting 0.25 m closer to the goal before asking for help",
+                unit: Count,
+                field: |c| Field::U32(&mut c.patience),
+            },
+        ];
+        params.extend(map_params::<Self>(
+            |c| Field::Real(&mut c.map_resolution),
+            |c| Field::Real(&mut c.map_margin),
+            |c| Field::Real(&mut c.safety_buffer),
+        ));
+        params
+    }
+}
 impl Default for NatConfig {
     fn default() -> Self {
         Self {

@@ -89,6 +89,7 @@
 //!
 //! Mission keep-out polygons are C-obstacles like sensed ones (their hulls, grown alike).
 
+use crate::params::{Field, Param, Unit, turn_threshold_param};
 use crate::terrain_model::{HAZARD_MARGIN, T_GRID_RESOLUTION, TOP_HAZARD_MARGIN};
 use rovernav_core::{
     DriveGuard, Grid2, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, OverlayKind,
@@ -120,6 +121,10 @@ pub struct RoverBugConfig {
     /// (top heights at [`TOP_HAZARD_MARGIN`]) still checks every motion against the body
     /// outline. See README.md for what 0.9 against 0.8 measured on seeds 1..160.
     pub clearance_margin: f64,
+    /// Fraction of the rover's belly clearance at which the safety layer (top heights) marks a
+    /// step hazard: lower keeps the body farther from rocks near the clearance at the cost of
+    /// arrivals (README.md: 0.8 against 0.9 on seeds 1..160).
+    pub safety_clearance_margin: f64,
     /// Buffer left inside the wedge's far radius when a path is truncated (m).
     pub range_buffer: f64,
     /// Heading error above which the rover turns in place before driving (rad).
@@ -171,6 +176,7 @@ impl Default for RoverBugConfig {
         Self {
             safety_buffer: 0.1,
             clearance_margin: 0.9,
+            safety_clearance_margin: TOP_HAZARD_MARGIN,
             range_buffer: 1.0,
             turn_threshold: 10f64.to_radians(),
             leave_margin: 0.1,
@@ -189,6 +195,130 @@ impl Default for RoverBugConfig {
             confirm_fraction: 0.3,
             squeeze_views: 2,
         }
+    }
+}
+
+impl RoverBugConfig {
+    /// The parameters a mission file may set (`[navigator_params]`).
+    pub fn params() -> Vec<Param<Self>> {
+        use Unit::*;
+        vec![
+            Param {
+                name: "safety_buffer_m",
+                doc: "safety buffer added to the rover radius when growing C-obstacles",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.safety_buffer),
+            },
+            Param {
+                name: "clearance_margin",
+                doc: "fraction of the belly clearance at which the C-obstacles' step model (cell means) marks a hazard",
+                unit: Fraction,
+                field: |c| Field::Real(&mut c.clearance_margin),
+            },
+            Param {
+                name: "safety_clearance_margin",
+                doc: "fraction of the belly clearance at which the safety layer (cell tops) marks a step hazard",
+                unit: Fraction,
+                field: |c| Field::Real(&mut c.safety_clearance_margin),
+            },
+            Param {
+                name: "range_buffer_m",
+                doc: "buffer left inside the wedge's far radius when a subpath is cut",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.range_buffer),
+            },
+            turn_threshold_param(|c| Field::Real(&mut c.turn_threshold)),
+            Param {
+                name: "leave_margin_m",
+                doc: "how much closer than d_reach a node must be to leave boundary following",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.leave_margin),
+            },
+            Param {
+                name: "interior_angle_deg",
+                doc: "angular margin inside the conglomerate wedge's bounding rays for \"interior\"",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.interior_angle),
+            },
+            Param {
+                name: "near_visible_m",
+                doc: "distance from the sensing position within which the ground counts as visible",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.near_visible),
+            },
+            Param {
+                name: "carry_margin_m",
+                doc: "margin beyond near_visible_m within which the last view's C-obstacles always stay",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.carry_margin),
+            },
+            Param {
+                name: "retreat_distance_m",
+                doc: "distance driven back along the trail when planning finds no way on",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.retreat_distance),
+            },
+            Param {
+                name: "max_retreats",
+                doc: "retreats from dead ends before planning's give-up stands",
+                unit: Count,
+                field: |c| Field::U32(&mut c.max_retreats),
+            },
+            Param {
+                name: "max_steps",
+                doc: "sense-plan-act steps before asking for help",
+                unit: Count,
+                field: |c| Field::U32(&mut c.max_steps),
+            },
+            Param {
+                name: "max_wedges",
+                doc: "wedges sensed in all before asking for help",
+                unit: Count,
+                field: |c| Field::U64(&mut c.max_wedges),
+            },
+            Param {
+                name: "max_contacts_here",
+                doc: "hazard contacts recorded around one place before asking for help",
+                unit: Count,
+                field: |c| Field::Usize(&mut c.max_contacts_here),
+            },
+            Param {
+                name: "body_margin_m",
+                doc: "clearance kept between the body outline and a safety-layer hazard cell",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.body_margin),
+            },
+            Param {
+                name: "max_refusals_here",
+                doc: "motions refused by the safety check at one place before asking for help",
+                unit: Count,
+                field: |c| Field::U32(&mut c.max_refusals_here),
+            },
+            Param {
+                name: "top_allowance_m",
+                doc: "added to half the rover's width to grow the safety layer's own C-obstacles",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.top_allowance),
+            },
+            Param {
+                name: "escape_distance_m",
+                doc: "straight drive out of a place where safety-layer hazards forbid a full turn",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.escape_distance),
+            },
+            Param {
+                name: "confirm_fraction",
+                doc: "fraction of the safety layer's step limit a hazard cell must stand out from the ground around it",
+                unit: Fraction,
+                field: |c| Field::Real(&mut c.confirm_fraction),
+            },
+            Param {
+                name: "squeeze_views",
+                doc: "sensing positions that keep C-obstacles without the safety buffer after a squeeze (0 disables)",
+                unit: Count,
+                field: |c| Field::U32(&mut c.squeeze_views),
+            },
+        ]
     }
 }
 
@@ -708,7 +838,7 @@ impl RoverBug {
                 rows: 121,
                 resolution: T_GRID_RESOLUTION,
                 hazard_height: HazardHeight::Top,
-                clearance: self.rover.clearance * TOP_HAZARD_MARGIN,
+                clearance: self.rover.clearance * self.config.safety_clearance_margin,
                 ..self.terrain.clone()
             };
             self.safety = TerrainEvaluator::new(config, pose).ok();

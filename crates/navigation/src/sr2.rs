@@ -17,6 +17,7 @@
 //! Keep-out zones are treated like obstacles seen by the middle cluster.
 
 use crate::gestalt::keep_out_distance;
+use crate::params::{Field, Param, Unit};
 use rovernav_core::{
     DriveGuard, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Point2, ProximityReading,
     RoverConfig, angle_diff,
@@ -55,6 +56,98 @@ pub struct Sr2Config {
     pub avoid_memory: f64,
 }
 
+impl Sr2Config {
+    /// The parameters a mission file may set (`[navigator_params]`).
+    pub fn params() -> Vec<Param<Self>> {
+        use Unit::*;
+        vec![
+            Param {
+                name: "dead_band_deg",
+                doc: "heading dead-band: turn toward the target only beyond this",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.dead_band),
+            },
+            Param {
+                name: "leg_m",
+                doc: "longest straight leg between heading checks",
+                unit: PositiveMetres,
+                field: |c| Field::Real(&mut c.leg),
+            },
+            Param {
+                name: "backup_m",
+                doc: "back-up distance of an avoidance",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.backup),
+            },
+            Param {
+                name: "side_rotation_deg",
+                doc: "rotation away from a side-cluster obstacle",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.side_rotation),
+            },
+            Param {
+                name: "middle_rotation_deg",
+                doc: "rotation away from a middle-cluster obstacle",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.middle_rotation),
+            },
+            Param {
+                name: "clear_leg_m",
+                doc: "forward leg that must complete without a trigger to end an avoidance",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.clear_leg),
+            },
+            Param {
+                name: "max_tilt_deg",
+                doc: "inclinometer tilt limit",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.max_tilt),
+            },
+            Param {
+                name: "tilt_margin_deg",
+                doc: "how far below the limit the drive guard trips",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.tilt_margin),
+            },
+            Param {
+                name: "slope_backup_m",
+                doc: "back-up distance after a slope exception",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.slope_backup),
+            },
+            Param {
+                name: "slope_turn_deg",
+                doc: "heading change per slope correction",
+                unit: Degrees,
+                field: |c| Field::Real(&mut c.slope_turn),
+            },
+            Param {
+                name: "tack_leg_m",
+                doc: "distance driven across the slope before turning back toward the target",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.tack_leg),
+            },
+            Param {
+                name: "max_diversion_m",
+                doc: "distance from the straight course beyond which the rover asks for help",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.max_diversion),
+            },
+            Param {
+                name: "patience_m",
+                doc: "distance driven without getting 0.5 m closer to the target before asking for help",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.patience_m),
+            },
+            Param {
+                name: "avoid_memory_m",
+                doc: "distance after an avoidance within which the next one keeps its rotation direction",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.avoid_memory),
+            },
+        ]
+    }
+}
 impl Default for Sr2Config {
     fn default() -> Self {
         Self {

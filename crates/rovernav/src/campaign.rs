@@ -97,6 +97,9 @@ fn run_campaign(args: RunArgs) -> anyhow::Result<()> {
             bail!("--navigators: unknown navigator `{bad}` (known: all, {})", known.join(", "));
         }
         spec.navigators = navs.clone();
+        // Parameters of navigators the override leaves out have no runs to go to.
+        let names = spec.navigator_names();
+        spec.navigator_params.retain(|name, _| names.contains(name));
     }
     if let Some(t) = args.trials {
         spec.trials = t;

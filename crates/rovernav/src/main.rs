@@ -35,6 +35,8 @@ enum Command {
     /// Evaluations against simulator truth.
     #[command(subcommand)]
     Eval(EvalCommand),
+    /// The registered navigators and the parameters each takes in a mission's `[navigator_params]`.
+    Navigators(NavigatorsArgs),
     /// Campaigns: every navigator on the same generated terrains, with a results table and plots.
     Campaign(campaign::CampaignArgs),
     /// The simulator as its own process, serving a rover over zenoh (feature `zenoh`).
@@ -53,6 +55,13 @@ enum EvalCommand {
     Localization(eval_localization::EvalLocalizationArgs),
 }
 
+/// Options of `rovernav navigators`.
+#[derive(clap::Args, Debug)]
+struct NavigatorsArgs {
+    /// Only this navigator (registry name).
+    name: Option<String>,
+}
+
 /// Options of `rovernav run`.
 #[derive(clap::Args, Debug, Default)]
 struct RunArgs {
@@ -67,6 +76,10 @@ struct RunArgs {
     /// Override the mission's localiser (registry name: dead-reckoning, ekf, ekf-ml).
     #[arg(long)]
     localizer: Option<String>,
+    /// Set a navigator parameter, NAME=VALUE (repeatable; over the mission's
+    /// `[navigator_params]`; `rovernav navigators` lists them).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    params: Vec<String>,
     /// Print report.json to standard output.
     #[arg(long)]
     json: bool,
@@ -98,8 +111,32 @@ impl MissionToRun {
             mission.seed = seed;
         }
         if let Some(nav) = &args.navigator {
+            if *nav != mission.navigator {
+                // The mission's parameters belong to the navigator it names.
+                mission.navigator_params.clear();
+            }
             mission.navigator = nav.clone();
             origin_of_navigator = "--navigator".into();
+        }
+        for param in &args.params {
+            let Some((name, value)) = param.split_once('=') else {
+                anyhow::bail!("--param `{param}`: expected NAME=VALUE");
+            };
+            let value: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--param `{param}`: the value is not a number"))?;
+            mission.navigator_params.insert(name.trim().to_string(), value);
+        }
+        if !args.params.is_empty()
+            && rovernav_navigation::navigator_params(&mission.navigator).is_some()
+            && let Err(e) = rovernav_navigation::navigator_with_params(
+                &mission.navigator,
+                &rovernav_core::RoverConfig::default(),
+                &mission.navigator_params,
+            )
+        {
+            anyhow::bail!("--param: {e}");
         }
         if let Some(name) = &args.localizer {
             if !rovernav_localization::LOCALIZER_NAMES.contains(&name.as_str()) {
@@ -133,6 +170,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(cmd)) => bench::run(cmd),
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
+        Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),
         Some(Command::Rover(args)) => distributed::rover(args),
@@ -145,6 +183,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn navigators(args: NavigatorsArgs) -> anyhow::Result<()> {
+    let names: Vec<&str> = match &args.name {
+        Some(name) => vec![name.as_str()],
+        None => rovernav_navigation::NAVIGATOR_NAMES.to_vec(),
+    };
+    for name in names {
+        let Some(params) = rovernav_navigation::navigator_params(name) else {
+            anyhow::bail!(
+                "unknown navigator `{name}` (known: {})",
+                rovernav_navigation::NAVIGATOR_NAMES.join(", ")
+            );
+        };
+        println!("{name}");
+        for p in params {
+            println!("  {} = {} ({}): {}", p.name, p.default, p.unit, p.doc);
+        }
+    }
+    Ok(())
 }
 
 fn run(args: RunArgs) -> anyhow::Result<()> {

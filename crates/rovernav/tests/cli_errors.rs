@@ -118,3 +118,34 @@ fn broken_pipe_on_stdout_panicked_in_println() {
     assert!(!stderr.contains("panicked"), "panic: {stderr}");
     assert!(out.status.success() || out.status.signal() == Some(libc::SIGPIPE), "{:?}: {stderr}", out.status);
 }
+
+#[test]
+fn bad_navigator_params_name_the_file_line_and_parameter() {
+    let dir = temp_dir("params");
+    let text = format!("{}\n[navigator_params]\nsafety_bufer_m = 0.2\n", DEFAULT);
+    let line = text.lines().count();
+    let path = write_mission(&dir, "params.toml", &text);
+    let out = dir.join("out");
+    let (ok, err) = rovernav(&["run", &path, "--out", out.to_str().unwrap()]);
+    assert_one_line_error(
+        ok,
+        &err,
+        &["params.toml", "navigator_params.safety_bufer_m", &format!("line {line}")],
+    );
+    assert!(!out.join("report.json").exists(), "no output on bad input");
+    for (param, names) in [
+        ("max_wedges=3", vec!["--param", "astar-grid", "max_wedges"]),
+        ("safety_buffer_m", vec!["--param", "NAME=VALUE"]),
+        ("safety_buffer_m=wide", vec!["--param", "not a number"]),
+        ("safety_buffer_m=-1", vec!["--param", "safety_buffer_m", ">= 0"]),
+    ] {
+        let (ok, err) = rovernav(&["run", "--param", param, "--out", out.to_str().unwrap()]);
+        assert_one_line_error(ok, &err, &names);
+    }
+    let (ok, err) = rovernav(&["navigators", "warp-drive"]);
+    assert_one_line_error(ok, &err, &["warp-drive", "roverbug"]);
+    let listing =
+        Command::new(env!("CARGO_BIN_EXE_rovernav")).args(["navigators", "roverbug"]).output().unwrap();
+    let listing = String::from_utf8_lossy(&listing.stdout);
+    assert!(listing.contains("safety_clearance_margin = 0.9"), "{listing}");
+}

@@ -16,6 +16,7 @@ fn settings() -> RunSettings {
         time_limit_s: 3600.0,
         max_cycles: 400,
         name: "telemetry-yard".into(),
+        navigator_params: Default::default(),
     }
 }
 

@@ -180,6 +180,18 @@ pub struct SettingsMsg {
     pub max_cycles: u64,
     /// Mission name.
     pub name: String,
+    /// Navigator parameters the mission sets (absent in recordings made before they existed).
+    #[serde(default)]
+    pub navigator_params: Vec<NavigatorParamMsg>,
+}
+
+/// One navigator parameter of the run settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NavigatorParamMsg {
+    /// Parameter name, as in the mission file.
+    pub name: String,
+    /// Value, in the parameter's unit.
+    pub value: f64,
 }
 
 impl SettingsMsg {
@@ -192,6 +204,11 @@ impl SettingsMsg {
             time_limit_s: s.time_limit_s,
             max_cycles: s.max_cycles,
             name: s.name.clone(),
+            navigator_params: s
+                .navigator_params
+                .iter()
+                .map(|(name, &value)| NavigatorParamMsg { name: name.clone(), value })
+                .collect(),
         }
     }
 
@@ -204,6 +221,7 @@ impl SettingsMsg {
             time_limit_s: self.time_limit_s,
             max_cycles: self.max_cycles,
             name: self.name.clone(),
+            navigator_params: self.navigator_params.iter().map(|p| (p.name.clone(), p.value)).collect(),
         }
     }
 
@@ -219,6 +237,19 @@ impl SettingsMsg {
                 ("time_limit_s", number("mission time budget (s)")),
                 ("max_cycles", integer("navigator cycle budget")),
                 ("name", string("mission name")),
+                (
+                    "navigator_params",
+                    array(
+                        "navigator parameters the mission sets",
+                        object(
+                            "one navigator parameter",
+                            &[
+                                ("name", string("parameter name, as in the mission file")),
+                                ("value", number("value, in the parameter's unit")),
+                            ],
+                        ),
+                    ),
+                ),
             ],
         )
     }
@@ -1124,6 +1155,7 @@ mod tests {
             time_limit_s: 60.0,
             max_cycles: 10,
             name: "m".into(),
+            navigator_params: [("safety_buffer_m".to_string(), 0.2)].into(),
         };
         assert_eq!(through_json(&SettingsMsg::of(&s), &SettingsMsg::schema()).to_settings(), s);
         let report = rovernav_executive::Report {
