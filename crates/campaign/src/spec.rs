@@ -301,14 +301,10 @@ impl CampaignSpec {
                     format!("`{name}` is not among the campaign's navigators ({})", names.join(", ")),
                 );
             }
-            let rover = rovernav_core::RoverConfig::default();
-            if let Err(e) = rovernav_navigation::navigator_with_params(name, &rover, params) {
-                let field = match &e {
-                    rovernav_navigation::NavigatorError::UnknownParam { param, .. }
-                    | rovernav_navigation::NavigatorError::InvalidParam { param, .. } => {
-                        format!("navigator_params.{name}.{param}")
-                    }
-                    _ => format!("navigator_params.{name}"),
+            if let Err(e) = rovernav_navigation::check_params(name, params) {
+                let field = match e.param() {
+                    Some(param) => format!("navigator_params.{name}.{param}"),
+                    None => format!("navigator_params.{name}"),
                 };
                 return bad(&field, e.to_string());
             }

@@ -442,20 +442,8 @@ impl Mission {
             return bad("goal.tolerance_m", "must be positive");
         }
         // An unknown navigator name is the run's error (it lists the registered ones).
-        if rovernav_navigation::navigator_params(&self.navigator).is_some()
-            && let Err(e) = rovernav_navigation::navigator_with_params(
-                &self.navigator,
-                &rovernav_core::RoverConfig::default(),
-                &self.navigator_params,
-            )
-        {
-            let field = match &e {
-                rovernav_navigation::NavigatorError::UnknownParam { param, .. }
-                | rovernav_navigation::NavigatorError::InvalidParam { param, .. } => {
-                    format!("navigator_params.{param}")
-                }
-                _ => "navigator".to_string(),
-            };
+        if let Err(e) = rovernav_navigation::check_params(&self.navigator, &self.navigator_params) {
+            let field = e.param().map_or("navigator_params".into(), |p| format!("navigator_params.{p}"));
             return bad(&field, &e.to_string());
         }
         for (i, zone) in self.goal.keep_out.iter().enumerate() {

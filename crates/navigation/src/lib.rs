@@ -77,6 +77,15 @@ pub fn navigator_with_params(
     })
 }
 
+/// Checks a navigator's parameters (names and ranges) for a mission or campaign file. An
+/// unknown navigator passes: callers report unknown names with their own list of names.
+pub fn check_params(name: &str, params: &NavigatorParams) -> Result<(), NavigatorError> {
+    match navigator_with_params(name, &RoverConfig::default(), params) {
+        Ok(_) | Err(NavigatorError::UnknownNavigator { .. }) => Ok(()),
+        Err(e) => Err(e),
+    }
+}
+
 /// One parameter a navigator takes in the mission file's `[navigator_params]` table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamInfo {
@@ -151,5 +160,8 @@ mod tests {
         let err = navigator_with_params("astar-grid", &rover, &tiny).err().unwrap();
         assert!(matches!(err, NavigatorError::InvalidParam { .. }), "{err}");
         assert!(navigator_by_name("roverbug", &rover).is_some());
+        // Checking leaves unknown navigator names to the caller, and names the parameter.
+        assert!(check_params("warp-drive", &bogus).is_ok());
+        assert_eq!(check_params("roverbug", &bogus).unwrap_err().param(), Some("wedge_count"));
     }
 }

@@ -116,6 +116,18 @@ impl fmt::Display for NavigatorError {
 
 impl std::error::Error for NavigatorError {}
 
+impl NavigatorError {
+    /// The parameter the error is about, if any.
+    pub fn param(&self) -> Option<&str> {
+        match self {
+            NavigatorError::UnknownParam { param, .. } | NavigatorError::InvalidParam { param, .. } => {
+                Some(param)
+            }
+            NavigatorError::UnknownNavigator { .. } => None,
+        }
+    }
+}
+
 /// Sets every parameter of `params` on `config` from the navigator's `table`; the config is
 /// left unchanged when any name or value is wrong.
 pub fn apply<C: Clone>(

@@ -128,14 +128,7 @@ impl MissionToRun {
                 .map_err(|_| anyhow::anyhow!("--param `{param}`: the value is not a number"))?;
             mission.navigator_params.insert(name.trim().to_string(), value);
         }
-        if !args.params.is_empty()
-            && rovernav_navigation::navigator_params(&mission.navigator).is_some()
-            && let Err(e) = rovernav_navigation::navigator_with_params(
-                &mission.navigator,
-                &rovernav_core::RoverConfig::default(),
-                &mission.navigator_params,
-            )
-        {
+        if let Err(e) = rovernav_navigation::check_params(&mission.navigator, &mission.navigator_params) {
             anyhow::bail!("--param: {e}");
         }
         if let Some(name) = &args.localizer {
