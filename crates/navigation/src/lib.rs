@@ -148,6 +148,54 @@ mod tests {
         }
     }
 
+    /// Sets each parameter of `table` alone to a valid value other than its default and checks
+    /// that it, and no other parameter, reads it back: a row pointing at another row's field
+    /// (or converting wrongly) fails.
+    fn each_parameter_sets_its_own_field<C: Clone>(defaults: C, table: Vec<Param<C>>) {
+        let read = |config: &C| {
+            let mut c = config.clone();
+            table.iter().map(|p| params::value(&mut c, p)).collect::<Vec<f64>>()
+        };
+        let before = read(&defaults);
+        for (i, p) in table.iter().enumerate() {
+            let value = match p.unit {
+                params::Unit::Fraction | params::Unit::CellSize if before[i] == 0.5 => 0.25,
+                params::Unit::Fraction | params::Unit::CellSize => 0.5,
+                params::Unit::Degrees if before[i] == 30.0 => 45.0,
+                params::Unit::Degrees => 30.0,
+                _ => before[i] + 1.0,
+            };
+            let one: NavigatorParams = [(p.name.to_string(), value)].into();
+            let config = configured("test", defaults.clone(), &table, &one).expect("a valid value");
+            let mut expected = before.clone();
+            expected[i] = value;
+            let after = read(&config);
+            for (k, (a, e)) in after.iter().zip(&expected).enumerate() {
+                assert!(
+                    (a - e).abs() < 1e-9,
+                    "setting {} changed {} to {a} (expected {e})",
+                    p.name,
+                    table[k].name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn every_parameter_sets_its_own_field() {
+        each_parameter_sets_its_own_field(GridNavigatorConfig::default(), GridNavigatorConfig::params());
+        each_parameter_sets_its_own_field(
+            gestalt::GestaltConfig::default(),
+            gestalt::GestaltConfig::params(),
+        );
+        each_parameter_sets_its_own_field(sr2::Sr2Config::default(), sr2::Sr2Config::params());
+        each_parameter_sets_its_own_field(nat::NatConfig::default(), nat::NatConfig::params());
+        each_parameter_sets_its_own_field(
+            roverbug::RoverBugConfig::default(),
+            roverbug::RoverBugConfig::params(),
+        );
+    }
+
     #[test]
     fn unknown_names_and_values_are_errors_naming_them() {
         let rover = RoverConfig::default();
