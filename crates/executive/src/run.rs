@@ -495,11 +495,7 @@ pub(crate) fn algorithms(
         },
         other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
     })?;
-    // A map-matching localiser needs views back over the terrain crossed (issue 5 item 5).
-    let look_back = rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
-    let navigator: Box<dyn Navigator> = if rovernav_localization::matches_terrain(&mission.localizer)
-        && !mission.navigator.ends_with(look_back)
-    {
+    let navigator: Box<dyn Navigator> = if needs_look_back(mission) {
         Box::new(rovernav_navigation::look_back::LookBack::new(navigator, Default::default()))
     } else {
         navigator
@@ -512,6 +508,14 @@ pub(crate) fn algorithms(
             known: rovernav_localization::LOCALIZER_NAMES.join(", "),
         })?;
     Ok((navigator, localizer))
+}
+
+/// Whether the mission's navigator is wrapped in the look-back decorator: a map-matching
+/// localiser needs views back over the terrain crossed (issue 5 item 5), unless the name asks
+/// for the wrapper itself.
+fn needs_look_back(mission: &RunSettings) -> bool {
+    rovernav_localization::matches_terrain(&mission.localizer)
+        && !mission.navigator.ends_with(rovernav_navigation::look_back::LOOK_BACK_SUFFIX)
 }
 
 /// The report's executive part: final component states, the diagnosed fault and each task's
@@ -562,7 +566,8 @@ pub(crate) fn add_components(
 ) -> Result<(), RuntimeError> {
     runtime.add(Box::new(
         NavigatorComponent::new(navigator, &mission.navigator, rover.clone())
-            .with_params(mission.navigator_params.clone()),
+            .with_params(mission.navigator_params.clone())
+            .with_look_back(needs_look_back(mission)),
     ))?;
     runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
     runtime.add(Box::new(MotionController::new()))?;

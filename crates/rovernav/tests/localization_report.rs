@@ -18,6 +18,14 @@ fn run_small_yard(localizer: &str) -> Value {
 /// Same as [`run_small_yard`], also returning the pans of every full-resolution mast image the
 /// run's telemetry log records.
 fn run_small_yard_logging(localizer: &str) -> (Value, Vec<f64>) {
+    let (report, looks, _) = run_logging(common::SMALL_YARD, localizer);
+    (report, looks.into_iter().map(|(pan, _)| pan).collect())
+}
+
+/// Runs a mission text with a localiser; returns report.json, the pose estimates (x, y) the
+/// telemetry log records in order, and for every full-resolution mast image it records, its
+/// pan and the index of the latest estimate when it was commanded.
+fn run_logging(mission_text: &str, localizer: &str) -> (Value, Vec<(f64, usize)>, Vec<[f64; 2]>) {
     // Tests run in parallel and may run the same localiser: every run gets its own folder.
     static RUNS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
@@ -26,7 +34,7 @@ fn run_small_yard_logging(localizer: &str) -> (Value, Vec<f64>) {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let mission: PathBuf = dir.join("mission.toml");
-    std::fs::write(&mission, common::SMALL_YARD).unwrap();
+    std::fs::write(&mission, mission_text).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_rovernav"))
         .arg("run")
         .arg(&mission)
@@ -37,15 +45,21 @@ fn run_small_yard_logging(localizer: &str) -> (Value, Vec<f64>) {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: Value = serde_json::from_slice(&out.stdout).unwrap();
     let log = std::fs::read(dir.join("out").join("telemetry.mcap")).unwrap();
-    let mut pans = Vec::new();
+    let (mut looks, mut track) = (Vec::new(), Vec::new());
     for m in mcap::MessageStream::new(&log).unwrap() {
         let m = m.unwrap();
+        if m.channel.topic == topics::ESTIMATE {
+            let v: Value = serde_json::from_slice(&m.data).unwrap();
+            track.push([v["pose"]["x"].as_f64().unwrap(), v["pose"]["y"].as_f64().unwrap()]);
+        }
         if m.channel.topic == topics::COMMAND {
+            let mut pans = Vec::new();
             fine_pans(&serde_json::from_slice(&m.data).unwrap(), &mut pans);
+            looks.extend(pans.into_iter().map(|p| (p, track.len().saturating_sub(1))));
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
-    (report, pans)
+    (report, looks, track)
 }
 
 /// Collects the pans of the `mast_fine` sense requests anywhere in a message.
@@ -113,4 +127,30 @@ fn target_selection_points_the_look_back_at_the_chosen_rearward_view() {
     let candidate = |p: f64| [pi, pi - pi / 4.0, pi + pi / 4.0].iter().any(|c| wrap(p - c).abs() < 1e-9);
     assert!(pans.iter().all(|&p| candidate(p)), "{pans:?}");
     assert!(pans.iter().any(|&p| wrap(p - pi).abs() > 0.1), "{pans:?}");
+}
+
+#[test]
+fn later_task_legs_keep_the_look_back_wrapper() {
+    // A waypoint makes two legs; the navigator component builds a fresh navigator for the
+    // second, which used to lose the look-back wrapper (and with it every pose fix after the
+    // first leg).
+    let waypoint = [5.0, 6.0];
+    let mission = common::SMALL_YARD.replace("[goal]\n", "[goal]\nwaypoints = [[5.0, 6.0]]\n");
+    assert_ne!(mission, common::SMALL_YARD);
+    let (report, looks, track) = run_logging(&mission, "ekf-ml");
+    assert_eq!(report["outcome"], "reached", "{report}");
+    let tasks = report["tasks"].as_array().unwrap();
+    assert!(tasks.len() >= 2 && tasks.iter().all(|t| t["state"] == "success"), "{report}");
+    // The first leg ends when the estimate comes within the 0.5 m tolerance of the waypoint.
+    let reached = track
+        .iter()
+        .position(|p| (p[0] - waypoint[0]).hypot(p[1] - waypoint[1]) <= 0.5)
+        .expect("the estimate reaches the waypoint");
+    let (first, second) = (
+        looks.iter().filter(|&&(_, i)| i < reached).count(),
+        looks.iter().filter(|&&(_, i)| i > reached).count(),
+    );
+    let rest: f64 = track[reached..].windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    // One look back per metre driven (the decorator's min_travel), on both legs.
+    assert!(first >= 1 && second >= 1, "{first} looks on the first leg, {second} on the {rest:.1} m second");
 }
