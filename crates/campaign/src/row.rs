@@ -53,11 +53,18 @@ pub struct Row {
     pub compute_per_cycle: StageTimes,
     /// Wall-clock time of the run (machine-dependent).
     pub wall_time_s: f64,
+    /// The report's message: why the run ended (empty in rows written before it was kept).
+    #[serde(default)]
+    pub message: String,
+    /// The simulator's description of the first hazard contact (e.g. `hazard: step of 0.182 m
+    /// at wheel 0`), if there was one: which limit the run broke and by how much.
+    #[serde(default)]
+    pub first_contact: Option<String>,
 }
 
 /// CSV column names, in the order of [`Row::csv_fields`] (the JSON keys, with
 /// `compute_per_cycle` flattened).
-pub const CSV_HEADER: [&str; 24] = [
+pub const CSV_HEADER: [&str; 26] = [
     "trial",
     "terrain_kind",
     "terrain",
@@ -82,6 +89,8 @@ pub const CSV_HEADER: [&str; 24] = [
     "localization_s_per_cycle",
     "platform_s_per_cycle",
     "wall_time_s",
+    "message",
+    "first_contact",
 ];
 
 impl Row {
@@ -115,6 +124,8 @@ impl Row {
             localization_error_m: report.localization_error_m,
             compute_per_cycle: report.compute_per_cycle,
             wall_time_s: report.wall_time_s,
+            message: report.message.clone(),
+            first_contact: report.hazard_events.first().map(|e| e.cause.clone()),
         }
     }
 
@@ -166,6 +177,8 @@ impl Row {
             localization_s.to_string(),
             platform_s.to_string(),
             self.wall_time_s.to_string(),
+            csv_quote(&self.message),
+            self.first_contact.as_deref().map_or(String::new(), csv_quote),
         ]
     }
 }
@@ -222,6 +235,15 @@ pub(crate) mod tests {
             distance_driven_m: driven,
             optimal_length_m: Some(10.0),
             hazard_contacts: hazards,
+            hazard_events: (0..hazards)
+                .map(|k| rovernav_executive::HazardEvent {
+                    x: 1.0,
+                    y: 2.0,
+                    cycle: 3 + u64::from(k),
+                    cause: format!("hazard: step of 0.18{k} m at wheel 0"),
+                })
+                .collect(),
+            message: format!("{outcome}, after all"),
             sensing_actions: 7,
             cycles: 20,
             goal_error_m: 0.3,
@@ -246,6 +268,19 @@ pub(crate) mod tests {
         assert!(row(0, "nat", "reached", 0, 12.0).success);
         assert!(!row(0, "nat", "reached", 1, 12.0).success);
         assert!(!row(0, "nat", "timeout", 0, 12.0).success);
+    }
+
+    #[test]
+    fn a_row_keeps_why_the_run_ended_and_its_first_contact() {
+        let r = row(0, "roverbug", "reached", 2, 12.0);
+        assert_eq!(r.message, "reached, after all");
+        assert_eq!(r.first_contact.as_deref(), Some("hazard: step of 0.180 m at wheel 0"));
+        assert_eq!(row(0, "roverbug", "reached", 0, 12.0).first_contact, None);
+        // Rows written before these fields were kept still read.
+        let mut old = serde_json::to_value(&r).unwrap();
+        old.as_object_mut().unwrap().retain(|k, _| k != "message" && k != "first_contact");
+        let back: Row = serde_json::from_value(old).unwrap();
+        assert_eq!((back.message.as_str(), back.first_contact), ("", None));
     }
 
     #[test]

@@ -165,6 +165,10 @@ pub struct Failure {
     pub slope_deg: Option<f64>,
     /// Traverse picture, relative to the output folder.
     pub picture: String,
+    /// Why it failed: the first hazard contact's description if there was one, else the
+    /// report's message.
+    #[serde(default)]
+    pub why: String,
 }
 
 /// Wall-clock figures, which vary from machine to machine and run to run.
@@ -225,6 +229,7 @@ pub fn summarise(meta: &CampaignMeta, rows: &[Row]) -> (Summary, MachineSummary)
             rock_abundance: r.rock_abundance,
             slope_deg: r.slope_deg,
             picture: format!("failures/{}", r.picture_name()),
+            why: r.first_contact.clone().unwrap_or_else(|| r.message.clone()),
         })
         .collect();
     let summary = Summary {
@@ -424,12 +429,12 @@ impl Summary {
         }
         if !self.failures.is_empty() {
             s.push_str("\n## Failed runs\n\nRerun a yard trial with `rovernav run failures/trial-NNNN.toml --navigator NAME`.\n\n");
-            s.push_str("| trial | navigator | outcome | hazard contacts | terrain | seed | rock abundance | slope (deg) | picture |\n");
-            s.push_str("|---:|---|---|---:|---|---:|---:|---:|---|\n");
+            s.push_str("| trial | navigator | outcome | hazard contacts | terrain | seed | rock abundance | slope (deg) | picture | why |\n");
+            s.push_str("|---:|---|---|---:|---|---:|---:|---:|---|---|\n");
             for f in &self.failures {
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {} | {} | {} | {:.3} | {} | [png]({}) |",
+                    "| {} | {} | {} | {} | {} | {} | {:.3} | {} | [png]({}) | {} |",
                     f.trial,
                     f.navigator,
                     f.outcome,
@@ -438,7 +443,8 @@ impl Summary {
                     f.seed,
                     f.rock_abundance,
                     num(f.slope_deg, 1),
-                    f.picture
+                    f.picture,
+                    f.why.replace('|', "\\|").replace(['\n', '\r'], " ")
                 );
             }
         }
@@ -559,6 +565,11 @@ mod tests {
         // 7 range images per run over 90 + 36 m.
         assert!((nat.sensing_per_m.unwrap() - 63.0 / 126.0).abs() < 1e-12);
         assert_eq!(s.failures.len(), 3 + 3);
+        // Why each failed: the first contact, else the run's own message.
+        let why =
+            |trial: usize| &s.failures.iter().find(|f| f.navigator == "nat" && f.trial == trial).unwrap().why;
+        assert_eq!(why(5), "hazard: step of 0.180 m at wheel 0");
+        assert_eq!(why(3), "timeout, after all");
         assert_eq!(s.terrains, 9);
         // Three rock values (0.05, 0.1, 0.2), three trials each.
         assert_eq!(s.by_rock_abundance.len(), 3);
@@ -602,5 +613,22 @@ mod tests {
         rows[1].compute_per_cycle.navigation_s = 0.3;
         let (_, m) = summarise(&meta(&["nat"]), &rows);
         assert!((m.compute_per_cycle[0].navigation_s - (1.0 + 9.0) / 40.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_failed_runs_table_keeps_its_columns_whatever_the_message() {
+        let mut rows = vec![row(0, "nat", "timeout", 0, 10.0), row(1, "nat", "reached", 0, 10.0)];
+        rows[0].message = "stuck | twice\nat (3, 4)".into();
+        let (s, _) = summarise(&meta(&["nat"]), &rows);
+        let md = s.markdown();
+        let table: Vec<&str> = md
+            .lines()
+            .skip_while(|l| !l.starts_with("## Failed runs"))
+            .filter(|l| l.starts_with('|'))
+            .collect();
+        assert_eq!(table.len(), 3, "{md}");
+        let cells = |l: &str| l.replace("\\|", "").matches('|').count();
+        assert!(table.iter().all(|l| cells(l) == cells(table[0])), "{table:?}");
+        assert!(table[2].contains("stuck \\| twice at (3, 4)"), "{}", table[2]);
     }
 }
