@@ -60,8 +60,6 @@ pub struct NavigatorComponent {
     registry_name: String,
     /// Parameters of every instance (the mission's `[navigator_params]`).
     params: rovernav_navigation::NavigatorParams,
-    /// Whether every instance is wrapped in the look-back decorator, as the first one was.
-    look_back: bool,
     rover: RoverConfig,
     navigator: Box<dyn Navigator>,
     /// The navigator above has not driven a leg yet.
@@ -90,7 +88,6 @@ impl NavigatorComponent {
         Self {
             registry_name: registry_name.to_string(),
             params: Default::default(),
-            look_back: false,
             rover,
             navigator,
             unused: true,
@@ -113,14 +110,6 @@ impl NavigatorComponent {
     /// Later legs' instances take these parameters (those the first instance was built with).
     pub fn with_params(mut self, params: rovernav_navigation::NavigatorParams) -> Self {
         self.params = params;
-        self
-    }
-
-    /// Later legs' instances are wrapped in the look-back decorator (the first instance was,
-    /// for a map-matching localiser): without it a multi-leg mission stops imaging back over the
-    /// crossed terrain after its first leg, and its pose fixes with it.
-    pub fn with_look_back(mut self, look_back: bool) -> Self {
-        self.look_back = look_back;
         self
     }
 
@@ -159,17 +148,12 @@ impl NavigatorComponent {
                 )?;
             }
             if !self.unused {
-                let fresh = rovernav_navigation::navigator_with_params(
+                self.navigator = rovernav_navigation::navigator_with_params(
                     &self.registry_name,
                     &self.rover,
                     &self.params,
                 )
                 .map_err(|e| ComponentFault(e.to_string()))?;
-                self.navigator = if self.look_back {
-                    Box::new(rovernav_navigation::look_back::LookBack::new(fresh, Default::default()))
-                } else {
-                    fresh
-                };
             }
             self.unused = false;
             self.leg = Some((d.task, d.goal.goal()));

@@ -483,7 +483,7 @@ pub(crate) fn algorithms(
     origin: &str,
 ) -> Result<(Box<dyn Navigator>, BoxedLocalizer), RunError> {
     let navigator: Box<dyn Navigator> = rovernav_navigation::navigator_with_params(
-        &mission.navigator,
+        &registry_name(mission),
         &world.rover,
         &mission.navigator_params,
     )
@@ -495,11 +495,6 @@ pub(crate) fn algorithms(
         },
         other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
     })?;
-    let navigator: Box<dyn Navigator> = if needs_look_back(mission) {
-        Box::new(rovernav_navigation::look_back::LookBack::new(navigator, Default::default()))
-    } else {
-        navigator
-    };
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
     let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
         .ok_or_else(|| RunError::UnknownLocalizer {
@@ -510,12 +505,17 @@ pub(crate) fn algorithms(
     Ok((navigator, localizer))
 }
 
-/// Whether the mission's navigator is wrapped in the look-back decorator: a map-matching
-/// localiser needs views back over the terrain crossed (issue 5 item 5), unless the name asks
-/// for the wrapper itself.
-fn needs_look_back(mission: &RunSettings) -> bool {
-    rovernav_localization::matches_terrain(&mission.localizer)
-        && !mission.navigator.ends_with(rovernav_navigation::look_back::LOOK_BACK_SUFFIX)
+/// The registry name every leg's navigator is built from: the mission's, wrapped in the
+/// look-back decorator ("+look-back") when a map-matching localiser needs views back over the
+/// terrain crossed (issue 5 item 5) and the name does not ask for it already. One name for
+/// the first leg and the later ones, which the navigator component builds afresh.
+fn registry_name(mission: &RunSettings) -> String {
+    let suffix = rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
+    if rovernav_localization::matches_terrain(&mission.localizer) && !mission.navigator.ends_with(suffix) {
+        format!("{}{suffix}", mission.navigator)
+    } else {
+        mission.navigator.clone()
+    }
 }
 
 /// The report's executive part: final component states, the diagnosed fault and each task's
@@ -565,9 +565,8 @@ pub(crate) fn add_components(
     platform: Box<dyn crate::components::Component>,
 ) -> Result<(), RuntimeError> {
     runtime.add(Box::new(
-        NavigatorComponent::new(navigator, &mission.navigator, rover.clone())
-            .with_params(mission.navigator_params.clone())
-            .with_look_back(needs_look_back(mission)),
+        NavigatorComponent::new(navigator, &registry_name(mission), rover.clone())
+            .with_params(mission.navigator_params.clone()),
     ))?;
     runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
     runtime.add(Box::new(MotionController::new()))?;
