@@ -427,18 +427,36 @@ pub struct RoverBug {
     drawn_paths: Vec<Vec<Point2>>,
 }
 
+/// The step/slope model behind RoverBug's C-obstacles: cell means over one sensing position's
+/// wedges, with hazard limits below the rover's true limits, as the grid navigators use.
+pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainConfig {
+    TerrainConfig {
+        cols: 81,
+        rows: 81,
+        clearance: rover.clearance * config.clearance_margin,
+        max_tilt: rover.max_tilt * HAZARD_MARGIN,
+        safety_buffer: config.safety_buffer,
+        ..TerrainConfig::for_rover(rover)
+    }
+}
+
+/// The safety layer's model, kept across steps: top heights, which do not lose a small rock's
+/// height as cell means do, on the grid navigators' finer cells.
+pub fn safety_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainConfig {
+    TerrainConfig {
+        cols: 121,
+        rows: 121,
+        resolution: T_GRID_RESOLUTION,
+        hazard_height: HazardHeight::Top,
+        clearance: rover.clearance * config.safety_clearance_margin,
+        ..c_obstacle_terrain(rover, config)
+    }
+}
+
 impl RoverBug {
     /// A RoverBug navigator for a rover.
     pub fn new(rover: RoverConfig, config: RoverBugConfig) -> Self {
-        // Hazard limits below the rover's true limits, as the grid navigators use.
-        let terrain = TerrainConfig {
-            cols: 81,
-            rows: 81,
-            clearance: rover.clearance * config.clearance_margin,
-            max_tilt: rover.max_tilt * HAZARD_MARGIN,
-            safety_buffer: config.safety_buffer,
-            ..TerrainConfig::for_rover(&rover)
-        };
+        let terrain = c_obstacle_terrain(&rover, &config);
         Self {
             rover,
             config,
@@ -831,16 +849,7 @@ impl RoverBug {
         self.carried.truncate(self.sensed_len);
         self.carried.retain(|o| o.signed_clearance(x) < reach);
         if self.safety.is_none() {
-            // Top heights do not lose a small rock's height as cell means do (the C-obstacles'
-            // hazard model), on the grid navigators' finer cells and margin.
-            let config = TerrainConfig {
-                cols: 121,
-                rows: 121,
-                resolution: T_GRID_RESOLUTION,
-                hazard_height: HazardHeight::Top,
-                clearance: self.rover.clearance * self.config.safety_clearance_margin,
-                ..self.terrain.clone()
-            };
+            let config = safety_terrain(&self.rover, &self.config);
             self.safety = TerrainEvaluator::new(config, pose).ok();
         }
         self.view = match TerrainEvaluator::new(self.terrain.clone(), pose) {

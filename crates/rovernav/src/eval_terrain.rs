@@ -7,11 +7,16 @@
 //! safe sensed cells and the elevation RMSE are pooled over all seeds. Hazard cells include the
 //! uncertain ones (raised to within far-range noise of the clearance), which the navigators
 //! never drive over before a closer look has settled them.
+//!
+//! `--model` picks the hazard model: the grid navigators' (default), or one of RoverBug's two,
+//! the cell-mean model its C-obstacles come from and its safety layer on top heights (before
+//! the layer's own confirmation against the ground around each cell).
 
 use anyhow::Context;
 use rovernav_core::{NavCommand, Point2, Pose3, PoseEstimate, SenseRequest};
 use rovernav_executive::{Mission, build_world};
 use rovernav_navigation::TerrainModel;
+use rovernav_navigation::roverbug::{RoverBugConfig, c_obstacle_terrain, safety_terrain};
 use rovernav_perception::TerrainConfig;
 use rovernav_perception::TerrainEvaluator;
 use rovernav_perception::evaluation::{TrueRock, evaluate_terrain};
@@ -26,6 +31,37 @@ pub struct EvalTerrainArgs {
     /// Print the figures as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Hazard model to evaluate.
+    #[arg(long, value_enum, default_value_t = HazardModel::Grid)]
+    pub model: HazardModel,
+}
+
+/// The hazard models `rovernav eval terrain` can score.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HazardModel {
+    /// The grid navigators' model (top heights, uncertain hazards included).
+    Grid,
+    /// RoverBug's C-obstacle model (cell means over one sensing position's wedges).
+    Roverbug,
+    /// RoverBug's safety layer (top heights on finer cells).
+    RoverbugSafety,
+}
+
+impl HazardModel {
+    /// The name `--model` takes.
+    fn name(self) -> String {
+        clap::ValueEnum::to_possible_value(&self).map_or_else(String::new, |v| v.get_name().to_string())
+    }
+
+    /// The perception settings of this model for a rover.
+    fn config(self, rover: &rovernav_core::RoverConfig) -> TerrainConfig {
+        let roverbug = RoverBugConfig::default();
+        match self {
+            HazardModel::Grid => TerrainModel::perception_config(rover, 0.1),
+            HazardModel::Roverbug => c_obstacle_terrain(rover, &roverbug),
+            HazardModel::RoverbugSafety => safety_terrain(rover, &roverbug),
+        }
+    }
 }
 
 /// Parses `A..B` (inclusive) or a single seed.
@@ -80,7 +116,7 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
             },
             covariance: [[0.0; 3]; 3],
         };
-        let detector = TerrainModel::perception_config(&world.rover, 0.1);
+        let detector = args.model.config(&world.rover);
         let resolution = detector.resolution;
         let mut evaluator = TerrainEvaluator::new(detector, world.start)?;
         let layers = evaluator.update(&frame.clouds, &estimate);
@@ -116,6 +152,7 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
     if args.json {
         let v = serde_json::json!({
             "seeds": format!("{}..{}", seeds.start(), seeds.end()),
+            "model": args.model.name(),
             "hazard_recall": recall,
             "false_hazard_rate": false_rate,
             "elevation_rmse_m": rmse,
@@ -128,12 +165,13 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!(
-            "seeds {}..{}: hazard recall {:.3} ({detected}/{rocks} rocks), false hazard rate {:.4} ({false_hazards}/{safe} safe cells), elevation RMSE {:.3} m over {cells} cells",
+            "seeds {}..{}: hazard recall {:.3} ({detected}/{rocks} rocks), false hazard rate {:.4} ({false_hazards}/{safe} safe cells), elevation RMSE {:.3} m over {cells} cells ({} model)",
             seeds.start(),
             seeds.end(),
             recall,
             false_rate,
-            rmse
+            rmse,
+            args.model.name()
         );
     }
     Ok(())
