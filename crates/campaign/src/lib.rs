@@ -8,10 +8,11 @@
 //! slices for job arrays.
 //! [`runner`] runs the jobs in parallel, [`row`] keeps one row per run, [`summary`] reduces
 //! the rows per navigator (success with a Wilson interval, path ratio, sensing per metre,
-//! compute per cycle), [`plots`] draws SVG charts and [`output`] writes and merges output
-//! folders. Rows are always sorted by (trial, navigator) before summarising, so a merge of
+//! compute per cycle), [`plots`] draws SVG charts, [`output`] writes and merges output
+//! folders and [`compare`] sets two folders' runs side by side, terrain by terrain. Rows are always sorted by (trial, navigator) before summarising, so a merge of
 //! shards gives the same summary as one unsharded run.
 
+pub mod compare;
 pub mod output;
 pub mod plan;
 pub mod plots;
@@ -20,6 +21,7 @@ pub mod runner;
 pub mod spec;
 pub mod summary;
 
+pub use compare::{Comparison, compare};
 pub use output::{CampaignMeta, merge_dirs, read_dir, write_dir};
 pub use plan::{Job, Plan, Shard, TerrainKind, TrialInfo};
 pub use row::Row;
@@ -77,6 +79,9 @@ pub enum CampaignError {
     /// Output folders that cannot be merged.
     #[error("merge: {0}")]
     Merge(String),
+    /// Runs that cannot be compared.
+    #[error("compare: {0}")]
+    Compare(String),
 }
 
 impl CampaignError {

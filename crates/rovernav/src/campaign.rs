@@ -7,6 +7,8 @@
 //! `SLURM_ARRAY_TASK_STEP`) of `SLURM_ARRAY_TASK_COUNT`, and a Kubernetes indexed job from
 //! `JOB_COMPLETION_INDEX` (0-based) of `--shard-count` or `ROVERNAV_SHARD_COUNT`.
 //! `rovernav campaign merge DIRS...` joins the slices' folders into one.
+//! `rovernav campaign compare DIRS... --against DIRS...` pairs two sets of runs terrain by
+//! terrain (McNemar's exact test on clean arrivals and on runs with contacts).
 
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -30,6 +32,29 @@ pub struct CampaignArgs {
 enum CampaignCommand {
     /// Join shard folders into one campaign folder whose summary equals an unsharded run's.
     Merge(MergeArgs),
+    /// Compare two sets of runs terrain by terrain: a variant against its baseline, or one
+    /// navigator against another, with McNemar's exact test on the terrains they disagree on.
+    Compare(CompareArgs),
+}
+
+/// Options of `rovernav campaign compare`.
+#[derive(clap::Args, Debug)]
+struct CompareArgs {
+    /// Side A: output folders of one or more campaigns (their runs are pooled).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Side B: output folders to compare against.
+    #[arg(long, required = true, num_args = 1..)]
+    against: Vec<PathBuf>,
+    /// Side A's navigator, when its folders hold several.
+    #[arg(long)]
+    a_navigator: Option<String>,
+    /// Side B's navigator, when its folders hold several.
+    #[arg(long)]
+    b_navigator: Option<String>,
+    /// Print the comparison as JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 /// Options of a campaign run.
@@ -82,6 +107,7 @@ struct MergeArgs {
 pub fn run(args: CampaignArgs) -> anyhow::Result<()> {
     match args.command {
         Some(CampaignCommand::Merge(m)) => merge(m),
+        Some(CampaignCommand::Compare(c)) => compare(c),
         None => run_campaign(args.run),
     }
 }
@@ -184,6 +210,26 @@ fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let (summary, machine) = rovernav_campaign::write_dir(&out_dir, &meta, &rows)
         .with_context(|| format!("{}: cannot write the merged campaign", out_dir.display()))?;
     print_summary(&summary, &machine, &out_dir, args.json);
+    Ok(())
+}
+
+fn compare(args: CompareArgs) -> anyhow::Result<()> {
+    let read = |dirs: &[PathBuf]| -> anyhow::Result<Vec<rovernav_campaign::Row>> {
+        let mut rows = Vec::new();
+        for d in dirs {
+            rows.extend(rovernav_campaign::read_dir(d)?.1);
+        }
+        Ok(rows)
+    };
+    let (a, b) = (read(&args.dirs)?, read(&args.against)?);
+    let c = rovernav_campaign::compare(&a, args.a_navigator.as_deref(), &b, args.b_navigator.as_deref())?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&c)?);
+    } else {
+        let label =
+            |dirs: &[PathBuf]| dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(" + ");
+        println!("{}", c.markdown(&label(&args.dirs), &label(&args.against)));
+    }
     Ok(())
 }
 

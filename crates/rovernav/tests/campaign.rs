@@ -243,3 +243,49 @@ fn bad_input_is_one_line_naming_what_is_wrong() {
     assert_one_line_error(ok, &err, &["absent", "campaign.json"]);
     assert!(!out.exists(), "no output folder on bad input");
 }
+
+#[test]
+fn compare_pairs_two_navigators_of_one_campaign_terrain_by_terrain() {
+    let dir = temp_dir("compare");
+    let spec = dir.join("tiny.toml");
+    std::fs::write(&spec, TINY).unwrap();
+    let out = dir.join("out");
+    let (ok, _, err) = rovernav(&["campaign", s(&spec), "--out", s(&out)]);
+    assert!(ok, "{err}");
+    let (ok, stdout, err) = rovernav(&[
+        "campaign",
+        "compare",
+        s(&out),
+        "--against",
+        s(&out),
+        "--a-navigator",
+        "astar-grid",
+        "--b-navigator",
+        "roverbug",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let c: Value = serde_json::from_str(&stdout).expect("--json prints the comparison");
+    // The independent truth: each navigator's rows in rows.jsonl, paired by terrain seed.
+    let rows = deterministic_rows(&out);
+    let clean = |nav: &str, seed: &Value| {
+        rows.iter().any(|r| {
+            r["navigator"] == nav
+                && r["seed"] == *seed
+                && r["outcome"] == "reached"
+                && r["hazard_contacts"] == 0
+        })
+    };
+    let seeds: Vec<Value> =
+        rows.iter().filter(|r| r["navigator"] == "roverbug").map(|r| r["seed"].clone()).collect();
+    assert_eq!(c["paired"], seeds.len());
+    let a_only = seeds.iter().filter(|sd| clean("astar-grid", sd) && !clean("roverbug", sd)).count();
+    let b_only = seeds.iter().filter(|sd| !clean("astar-grid", sd) && clean("roverbug", sd)).count();
+    assert_eq!(c["clean_arrivals"]["a_only"], a_only);
+    assert_eq!(c["clean_arrivals"]["b_only"], b_only);
+    assert_eq!(c["a"]["navigator"], "astar-grid");
+    assert_eq!(c["discordant"].as_array().unwrap().len(), a_only + b_only);
+    // Without naming the navigators the mixed folder is refused in one line.
+    let (ok, _, err) = rovernav(&["campaign", "compare", s(&out), "--against", s(&out)]);
+    assert_one_line_error(ok, &err, &["compare", "--a-navigator", "astar-grid, roverbug"]);
+}
