@@ -8,6 +8,7 @@
 
 use crate::CampaignError;
 use crate::row::Row;
+use crate::summary::markdown_cell;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -140,22 +141,19 @@ fn by_terrain(
     Ok((name, out))
 }
 
-fn clean(r: &Row) -> bool {
-    r.outcome == "reached" && r.hazard_contacts == 0
-}
-
-fn side_figures(navigator: String, runs: &[&Row], both_reached: &[(f64, f64)], first: bool) -> SideFigures {
+/// One side's figures over its paired `runs`; `ratios` are its path ratios on the terrains
+/// both sides reached.
+fn side_figures(navigator: String, runs: &[&Row], ratios: &[f64]) -> SideFigures {
     let km: f64 = runs.iter().map(|r| r.distance_driven_m).sum::<f64>() / 1000.0;
     let contacts = runs.iter().filter(|r| r.hazard_contacts > 0).count();
     let mut outcomes = BTreeMap::new();
     for r in runs {
         *outcomes.entry(r.outcome.clone()).or_insert(0) += 1;
     }
-    let ratios: Vec<f64> = both_reached.iter().map(|&(a, b)| if first { a } else { b }).collect();
     let images: u64 = runs.iter().map(|r| r.sensing_actions).sum();
     SideFigures {
         navigator,
-        clean_arrivals: runs.iter().filter(|r| clean(r)).count(),
+        clean_arrivals: runs.iter().filter(|r| r.success).count(),
         reached: runs.iter().filter(|r| r.outcome == "reached").count(),
         runs_with_contacts: contacts,
         contact_runs_per_km: if km > 0.0 { contacts as f64 / km } else { 0.0 },
@@ -170,10 +168,6 @@ fn paired_count(pairs: &[(&Row, &Row)], has: impl Fn(&Row) -> bool) -> PairedCou
     let a_only = pairs.iter().filter(|(a, b)| has(a) && !has(b)).count();
     let b_only = pairs.iter().filter(|(a, b)| !has(a) && has(b)).count();
     PairedCount { a_only, b_only, p_value: mcnemar_exact(a_only, b_only) }
-}
-
-fn why(r: &Row) -> String {
-    r.first_contact.clone().unwrap_or_else(|| r.message.clone())
 }
 
 /// Compares side A's runs of `a_navigator` (or its only navigator) with side B's, terrain by
@@ -191,20 +185,20 @@ pub fn compare(
         return Err(CampaignError::Compare("the two sides share no terrain".into()));
     }
     let unpaired = a.len() + b.len() - 2 * pairs.len();
-    let both_reached: Vec<(f64, f64)> =
-        pairs.iter().filter_map(|(ra, rb)| Some((ra.path_ratio?, rb.path_ratio?))).collect();
+    let (a_ratios, b_ratios): (Vec<f64>, Vec<f64>) =
+        pairs.iter().filter_map(|(ra, rb)| Some((ra.path_ratio?, rb.path_ratio?))).unzip();
     let a_runs: Vec<&Row> = pairs.iter().map(|(ra, _)| *ra).collect();
     let b_runs: Vec<&Row> = pairs.iter().map(|(_, rb)| *rb).collect();
     let mut discordant = Vec::new();
     for (side, failed, other) in [("a", 0, 1), ("b", 1, 0)] {
         for pair in &pairs {
             let runs = [pair.0, pair.1];
-            if !clean(runs[failed]) && clean(runs[other]) {
+            if !runs[failed].success && runs[other].success {
                 discordant.push(DiscordantRun {
                     seed: runs[failed].seed,
                     failed: side.to_string(),
                     outcome: runs[failed].outcome.clone(),
-                    why: why(runs[failed]),
+                    why: runs[failed].why(),
                 });
             }
         }
@@ -212,9 +206,9 @@ pub fn compare(
     Ok(Comparison {
         paired: pairs.len(),
         unpaired,
-        a: side_figures(a_name, &a_runs, &both_reached, true),
-        b: side_figures(b_name, &b_runs, &both_reached, false),
-        clean_arrivals: paired_count(&pairs, clean),
+        a: side_figures(a_name, &a_runs, &a_ratios),
+        b: side_figures(b_name, &b_runs, &b_ratios),
+        clean_arrivals: paired_count(&pairs, |r| r.success),
         runs_with_contacts: paired_count(&pairs, |r| r.hazard_contacts > 0),
         discordant,
     })
@@ -278,7 +272,7 @@ impl Comparison {
                 d.seed,
                 d.failed.to_uppercase(),
                 d.outcome,
-                d.why.replace('|', "\\|")
+                markdown_cell(&d.why)
             ));
         }
         s

@@ -143,6 +143,11 @@ impl Row {
         }
     }
 
+    /// Why the run failed, in a line: its first hazard contact, else its closing message.
+    pub fn why(&self) -> String {
+        self.first_contact.clone().unwrap_or_else(|| self.message.clone())
+    }
+
     /// Picture file name of this run (when it failed), e.g. `trial-0003-nat.png`.
     pub fn picture_name(&self) -> String {
         format!("trial-{:04}-{}.png", self.trial, self.navigator)

@@ -29,6 +29,11 @@ pub fn wilson(successes: usize, n: usize, z: f64) -> Option<[f64; 2]> {
     Some([(centre - half).max(0.0), (centre + half).min(1.0)])
 }
 
+/// Free text as one Markdown table cell: `|` escaped, line breaks as spaces.
+pub(crate) fn markdown_cell(text: &str) -> String {
+    text.replace('|', "\\|").replace(['\n', '\r'], " ")
+}
+
 /// The nearest-rank percentile (`q` in (0, 1]): the smallest value with at least `q` of the
 /// values at or below it; `None` for no values.
 pub fn percentile(values: &[f64], q: f64) -> Option<f64> {
@@ -229,7 +234,7 @@ pub fn summarise(meta: &CampaignMeta, rows: &[Row]) -> (Summary, MachineSummary)
             rock_abundance: r.rock_abundance,
             slope_deg: r.slope_deg,
             picture: format!("failures/{}", r.picture_name()),
-            why: r.first_contact.clone().unwrap_or_else(|| r.message.clone()),
+            why: r.why(),
         })
         .collect();
     let summary = Summary {
@@ -444,7 +449,7 @@ impl Summary {
                     f.rock_abundance,
                     num(f.slope_deg, 1),
                     f.picture,
-                    f.why.replace('|', "\\|").replace(['\n', '\r'], " ")
+                    markdown_cell(&f.why)
                 );
             }
         }
