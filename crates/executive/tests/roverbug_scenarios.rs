@@ -172,12 +172,33 @@ fn seed_8_squeezes_through_the_cluster_within_1_3x_of_the_optimal_path() {
     assert!(r.distance_driven_m < 1.3 * optimal, "driven {} against optimal {optimal}", r.distance_driven_m);
 }
 
+/// Seed 49 of the default Mars yard: the first subpath ran along the bounding ray of the mast
+/// wedge, so the body's left half swept ground no image had covered, and a wheel met the flank
+/// of a 0.38 m rock lying just outside the wedge (a 0.187 m step). With `unseen_looks` the
+/// drive stops where the body would leave sensed ground and the rover looks there first; it
+/// reaches the goal without a contact, which the simulator counts.
+#[test]
+#[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
+fn seed_49_with_unseen_looks_the_body_keeps_to_sensed_ground_and_reaches_the_goal_clean() {
+    let params = [("unseen_looks".to_string(), 2.0)].into();
+    let _ = assert_default_yard_seed_reached_clean_with(49, params);
+}
+
 /// Runs RoverBug on a seed of the default Mars yard and checks, against the simulator, that the
 /// seed has a safe path and the rover reached the goal without a hazard contact.
 fn assert_default_yard_seed_reached_clean(seed: u64) -> rovernav_executive::Report {
+    assert_default_yard_seed_reached_clean_with(seed, Default::default())
+}
+
+/// [`assert_default_yard_seed_reached_clean`] with RoverBug parameters.
+fn assert_default_yard_seed_reached_clean_with(
+    seed: u64,
+    params: rovernav_navigation::NavigatorParams,
+) -> rovernav_executive::Report {
     let mut mission = Mission::default_mission();
     mission.seed = seed;
     mission.navigator = "roverbug".into();
+    mission.navigator_params = params;
     let run = run_mission(&mission, &format!("default seed {seed}"), &mut |_| {}).expect("mission runs");
     let r = &run.report;
     assert!(r.optimal_length_m.is_some(), "seed {seed} has a safe path in truth");

@@ -107,6 +107,13 @@ const ARRIVAL_POINTS: usize = 16;
 /// Shortest hop onto the circle of arrival from outside the tolerance (m): motion-to-goal
 /// drops subpaths under 0.1 m.
 const ARRIVAL_MIN_HOP: f64 = 0.15;
+/// Look-ahead beyond the body's ends in the unseen-ground check (m): the wheel radius, over
+/// which the simulator's step check looks ahead of each wheel.
+const UNSEEN_LOOKAHEAD: f64 = 0.1;
+/// Margin by which a drive held back from unseen ground stops short of it (m).
+const UNSEEN_BACKOFF: f64 = 0.1;
+/// Shortest drive toward unseen ground worth commanding before looking at it (m).
+const UNSEEN_MIN_DRIVE: f64 = 0.3;
 
 /// Tunable parameters of RoverBug.
 #[derive(Clone, Debug)]
@@ -169,6 +176,10 @@ pub struct RoverBugConfig {
     /// radius alone after a squeeze: motion-to-goal found a way on only without the safety
     /// buffer (0 disables squeezing).
     pub squeeze_views: u32,
+    /// Looks at unseen ground from one place before a forward drive over it counts as refused
+    /// (0, the default, disables the check that the ground under the body of every forward
+    /// drive has been sensed; see `first_unseen` and README.md for what it measured).
+    pub unseen_looks: u32,
 }
 
 impl Default for RoverBugConfig {
@@ -194,6 +205,7 @@ impl Default for RoverBugConfig {
             escape_distance: 0.4,
             confirm_fraction: 0.3,
             squeeze_views: 2,
+            unseen_looks: 0,
         }
     }
 }
@@ -318,6 +330,12 @@ impl RoverBugConfig {
                 unit: Count,
                 field: |c| Field::U32(&mut c.squeeze_views),
             },
+            Param {
+                name: "unseen_looks",
+                doc: "looks at unseen ground under a forward drive's body before the drive is refused (0: drives are not checked for unseen ground)",
+                unit: Count,
+                field: |c| Field::U32(&mut c.unseen_looks),
+            },
         ]
     }
 }
@@ -390,6 +408,12 @@ pub struct RoverBug {
     refusals: (u32, Point2),
     /// Escapes from a boxed-in position, and where the last one started.
     escapes: (u32, Point2),
+    /// Looks at ground a drive would cover unseen, at this place (the count restarts 0.3 m
+    /// away), and where.
+    looks: (u32, Point2),
+    /// Where the next step's sensing also looks: the first unseen ground of the drive that
+    /// was held back.
+    look_at: Option<Point2>,
     /// Sign of the last motion: 1 forward, -1 reverse, 2 turn in place.
     last_motion: Option<f64>,
     /// Where the last forward drive started (estimate).
@@ -481,6 +505,8 @@ impl RoverBug {
             safety_hazard: None,
             refusals: (0, Point2::new(f64::NAN, f64::NAN)),
             escapes: (0, Point2::new(f64::NAN, f64::NAN)),
+            looks: (0, Point2::new(f64::NAN, f64::NAN)),
+            look_at: None,
             last_motion: None,
             drive_from: None,
             goal_tolerance: 0.0,
@@ -1255,6 +1281,31 @@ impl RoverBug {
         out
     }
 
+    /// The first of `poses` at which the body outline (with a wheel radius of look-ahead at
+    /// either end) covers ground the safety layer has not sensed (see [`first_unseen_pose`]).
+    /// The wedge geometry alone does not say this: a subpath along a wedge's edge takes half
+    /// the body outside it, and the ground behind a rock is in the wedge but hidden. Cells
+    /// under the body at `start` are left out (the rover stands there), and so is the mast's
+    /// blind zone around the sensing position, as for the local tangent graph (`near_visible`:
+    /// the rover's footprint, seen from the previous position).
+    fn first_unseen(&self, start: Pose2, poses: &[Pose2]) -> Option<usize> {
+        let safety = self.safety.as_ref()?;
+        let grid = safety.grid();
+        let origin = self.view.as_ref().map_or(start.position(), |v| v.origin);
+        let (half_l, half_w) = (0.5 * self.rover.length, 0.5 * self.rover.width);
+        let exempt = |q: Point2| {
+            let b = start.inverse_transform(q);
+            (b.x.abs() <= half_l && b.y.abs() <= half_w) || q.dist(origin) <= self.config.near_visible
+        };
+        first_unseen_pose(
+            poses,
+            (half_l + UNSEEN_LOOKAHEAD, half_w),
+            safety.config().resolution,
+            exempt,
+            |q| grid.at_world(q.x, q.y).is_some_and(|c| c.count > 0),
+        )
+    }
+
     /// The safety layer's hazard cells whose own points rise above (or fall below) the median
     /// height of the sensed cells within the footprint radius by a fraction of the layer's step
     /// limit. The step/slope model also marks ground-level cells of a window it finds hazardous
@@ -1458,9 +1509,31 @@ impl RoverBug {
             let (distance, curvature) = Self::arc_to(x.dist(next), error);
             // Backwards along an arc the yaw turns the other way for the same bend.
             let (distance, curvature) = (sign * distance, sign * curvature);
-            let cells = self.motion_hazards(pose, &Self::arc_poses(pose, distance, curvature));
+            let poses = Self::arc_poses(pose, distance, curvature);
+            let cells = self.motion_hazards(pose, &poses);
             if !cells.is_empty() {
                 return self.refuse(pose, goal);
+            }
+            // Forward, the body covers only sensed ground: the seen part of the arc is driven
+            // (the waypoint stays), and short of that the next step looks at the unseen part.
+            // Reversing retraces the trail.
+            let checked = self.config.unseen_looks > 0 && !self.reversing;
+            if let Some(j) = checked.then(|| self.first_unseen(pose, &poses)).flatten() {
+                let seen = distance * j as f64 / poses.len() as f64 - UNSEEN_BACKOFF;
+                if seen >= UNSEEN_MIN_DRIVE {
+                    self.last_motion = Some(sign);
+                    self.drive_from = Some(x);
+                    return NavCommand::Drive { distance: seen, curvature, guard: DriveGuard::default() };
+                }
+                let (count, at) = self.looks;
+                let count = if at.dist(x) < 0.3 { count + 1 } else { 1 };
+                self.looks = (count, x);
+                if count > self.config.unseen_looks {
+                    return self.refuse(pose, goal);
+                }
+                self.look_at = Some(poses[j].position());
+                self.waypoints.clear();
+                return self.open_step(pose, goal);
             }
             self.waypoints.pop_front();
             self.last_motion = Some(sign);
@@ -1633,6 +1706,16 @@ impl RoverBug {
             // Also along the boundary, a quarter turn from the goal direction.
             requests.push(Self::mast_at(pose, pose.yaw + sense * self.alpha_mast()));
         }
+        if let Some(target) = self.look_at.take()
+            && target.dist(pose.position()) > self.config.near_visible
+        {
+            // Gaze control: the ground a drive was held back from, beyond the mast's blind
+            // zone, unless the wedge toward the goal covers it.
+            let bearing = target.sub(pose.position()).angle();
+            if angle_diff(bearing, toward_goal).abs() > 0.5 * self.alpha_mast() {
+                requests.push(Self::mast_at(pose, bearing));
+            }
+        }
         requests.push(SenseRequest::BodyFront);
         if let Mode::Virtual { .. } = self.mode {
             self.mode = Mode::MotionToGoal;
@@ -1670,6 +1753,40 @@ impl RoverBug {
         }
         None
     }
+}
+
+/// The first of `poses` at which a body outline of half-extents `half` (m, along and across
+/// the heading) covers unseen ground: a cell centre of the `resolution` lattice (cells
+/// `[i r, (i + 1) r)`, as the map's) inside the outline,
+/// not `exempt`, that is not `sensed` and is no one-cell gap among sensed points (at least
+/// five of its eight lattice neighbours sensed: the spacing of a range image's far rows).
+fn first_unseen_pose(
+    poses: &[Pose2],
+    half: (f64, f64),
+    resolution: f64,
+    exempt: impl Fn(Point2) -> bool,
+    sensed: impl Fn(Point2) -> bool,
+) -> Option<usize> {
+    let n = (half.0.hypot(half.1) / resolution).ceil() as i64;
+    let lattice = |x: f64, y: f64| Point2::new((x + 0.5) * resolution, (y + 0.5) * resolution);
+    poses.iter().position(|pose| {
+        let (cx, cy) = ((pose.x / resolution).floor(), (pose.y / resolution).floor());
+        (-n..=n).any(|dr| {
+            (-n..=n).any(|dc| {
+                let (i, j) = (cx + dc as f64, cy + dr as f64);
+                let q = lattice(i, j);
+                let b = pose.inverse_transform(q);
+                if b.x.abs() > half.0 || b.y.abs() > half.1 || exempt(q) || sensed(q) {
+                    return false;
+                }
+                let around = [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)]
+                    .iter()
+                    .filter(|&&(a, c)| sensed(lattice(i + a as f64, j + c as f64)))
+                    .count();
+                around < 5
+            })
+        })
+    })
 }
 
 /// Euclidean distance from `p` to a C-obstacle's hull (the hazard cells' convex hull, before
@@ -2024,6 +2141,38 @@ mod tests {
         let under = bug_with_hazards(&[(0.15, 0.05)]);
         assert!(under.motion_hazards(start, &RoverBug::turn_poses(start, PI)).is_empty());
         assert!(under.motion_hazards(start, &RoverBug::arc_poses(start, 1.0, 0.0)).is_empty());
+    }
+
+    /// A 45-degree mast wedge along +x from the origin, sensed from 1 to 5 m.
+    fn wedge_sensed(q: Point2) -> bool {
+        (1.0..=5.0).contains(&q.norm()) && q.y.atan2(q.x).abs() <= 22.5f64.to_radians()
+    }
+
+    #[test]
+    fn a_drive_along_the_wedge_edge_meets_unseen_ground_within_a_metre_and_one_along_its_axis_none() {
+        let (half, blind) = ((0.5, 0.3), |q: Point2| q.norm() <= 1.0);
+        let axis = RoverBug::arc_poses(Pose2::new(0.0, 0.0, 0.0), 4.0, 0.0);
+        assert_eq!(first_unseen_pose(&axis, half, 0.1, blind, wedge_sensed), None);
+        // 2.5 degrees inside the edge, the body's left side leaves the wedge as soon as it is
+        // out of the blind zone (seed 49 of the default yard met a 0.38 m rock there).
+        let edge = RoverBug::arc_poses(Pose2::new(0.0, 0.0, 20f64.to_radians()), 4.0, 0.0);
+        let k = first_unseen_pose(&edge, half, 0.1, blind, wedge_sensed).expect("the body leaves the wedge");
+        assert!(edge[k].position().norm() < 1.0, "met at {:?}", edge[k]);
+    }
+
+    #[test]
+    fn a_one_row_gap_in_the_sensed_ground_passes_and_a_two_row_gap_stops_the_body_front() {
+        let axis = RoverBug::arc_poses(Pose2::new(0.0, 0.0, 0.0), 3.0, 0.0);
+        let column = |q: Point2| (q.x / 0.1).floor() as i64;
+        let one = |q: Point2| column(q) != 20;
+        assert_eq!(first_unseen_pose(&axis, (0.5, 0.3), 0.1, |_| false, one), None);
+        let two = |q: Point2| !matches!(column(q), 20 | 21);
+        let k = first_unseen_pose(&axis, (0.5, 0.3), 0.1, |_| false, two).expect("a two-row gap is unseen");
+        // The outline's front (0.5 m ahead of the centre) reaches the gap's first cell centres
+        // (x = 2.05 m); the poses are 5 cm apart.
+        assert!((1.55..=1.6).contains(&axis[k].x), "met at {:?}", axis[k]);
+        // Exempt ground (under the body where it stands) never counts.
+        assert_eq!(first_unseen_pose(&axis, (0.5, 0.3), 0.1, |q| q.x > 1.9, two), None);
     }
 
     #[test]
