@@ -1757,9 +1757,9 @@ impl RoverBug {
 
 /// The first of `poses` at which a body outline of half-extents `half` (m, along and across
 /// the heading) covers unseen ground: a cell centre of the `resolution` lattice (cells
-/// `[i r, (i + 1) r)`, as the map's) inside the outline,
-/// not `exempt`, that is not `sensed` and is no one-cell gap among sensed points (at least
-/// five of its eight lattice neighbours sensed: the spacing of a range image's far rows).
+/// `[i r, (i + 1) r)`, as the map's) inside the outline, not `exempt`, that is not `sensed`
+/// and is no one-cell gap among sensed cells (at least five of its eight neighbours sensed:
+/// the spacing of a range image's far rows).
 fn first_unseen_pose(
     poses: &[Pose2],
     half: (f64, f64),
@@ -2171,7 +2171,7 @@ mod tests {
         // The outline's front (0.5 m ahead of the centre) reaches the gap's first cell centres
         // (x = 2.05 m); the poses are 5 cm apart.
         assert!((1.55..=1.6).contains(&axis[k].x), "met at {:?}", axis[k]);
-        // Exempt ground (under the body where it stands) never counts.
+        // Exempt ground (in the navigator: under the body where it stands) never counts.
         assert_eq!(first_unseen_pose(&axis, (0.5, 0.3), 0.1, |q| q.x > 1.9, two), None);
     }
 
