@@ -40,6 +40,14 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// A fresh folder holding the tiny campaign file, and the file's path.
+fn tiny_campaign(name: &str) -> (PathBuf, PathBuf) {
+    let dir = temp_dir(name);
+    let spec = dir.join("tiny.toml");
+    std::fs::write(&spec, TINY).unwrap();
+    (dir, spec)
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -94,9 +102,7 @@ fn deterministic_rows(dir: &Path) -> Vec<Value> {
 
 #[test]
 fn four_shards_merged_equal_the_unsharded_campaign() {
-    let dir = temp_dir("shards");
-    let spec = dir.join("tiny.toml");
-    std::fs::write(&spec, TINY).unwrap();
+    let (dir, spec) = tiny_campaign("shards");
     let whole = dir.join("whole");
     let (ok, stdout, err) = rovernav(&["campaign", s(&spec), "--out", s(&whole), "--json"]);
     assert!(ok, "{err}");
@@ -246,9 +252,7 @@ fn bad_input_is_one_line_naming_what_is_wrong() {
 
 #[test]
 fn compare_pairs_two_navigators_of_one_campaign_terrain_by_terrain() {
-    let dir = temp_dir("compare");
-    let spec = dir.join("tiny.toml");
-    std::fs::write(&spec, TINY).unwrap();
+    let (dir, spec) = tiny_campaign("compare");
     let out = dir.join("out");
     let (ok, _, err) = rovernav(&["campaign", s(&spec), "--out", s(&out)]);
     assert!(ok, "{err}");
