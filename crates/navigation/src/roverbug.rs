@@ -186,11 +186,16 @@ pub struct RoverBugConfig {
     /// are dropped: the body crossed that ground without a hazard stop, which no sensed height
     /// overrules. Kept short because dead-reckoning drift between the map and the recorded
     /// poses grows with distance driven. 0, the default, disables it (README.md, session 17:
-    /// 3 m frees seed 19 but measured no gain on seeds 1..160).
+    /// 3 m frees seed 19 but measured no gain on seeds 1..320).
     pub swept_memory: f64,
     /// Inset of the body outline within which swept ground clears hazard cells (m): room for
     /// the drift and slip between the recorded poses and the body's true ones.
     pub swept_inset: f64,
+    /// Radius the C-obstacles are grown by before the safety buffer (m); 0, the default, takes
+    /// the rover's circumscribed radius, as the paper's disc rover. Half the rover's width
+    /// lets the rover's disc through narrower gaps and leaves turning to the safety layer's
+    /// body-outline check (README.md, session 17: more arrivals, twice the contacts).
+    pub growth_radius: f64,
 }
 
 impl Default for RoverBugConfig {
@@ -219,6 +224,7 @@ impl Default for RoverBugConfig {
             unseen_looks: 0,
             swept_memory: 0.0,
             swept_inset: 0.1,
+            growth_radius: 0.0,
         }
     }
 }
@@ -361,6 +367,12 @@ impl RoverBugConfig {
                 unit: Metres,
                 field: |c| Field::Real(&mut c.swept_inset),
             },
+            Param {
+                name: "growth_radius_m",
+                doc: "radius C-obstacles are grown by before the safety buffer (0: the rover's circumscribed radius)",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.growth_radius),
+            },
         ]
     }
 }
@@ -488,6 +500,7 @@ pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> Terra
         clearance: rover.clearance * config.clearance_margin,
         max_tilt: rover.max_tilt * HAZARD_MARGIN,
         safety_buffer: config.safety_buffer,
+        rover_radius: if config.growth_radius > 0.0 { config.growth_radius } else { rover.radius() },
         ..TerrainConfig::for_rover(rover)
     }
 }
@@ -1283,13 +1296,9 @@ impl RoverBug {
         };
         let mut out: Vec<Point2> = Vec::new();
         for pose in poses {
-            let (lo_x, lo_y) = (pose.x - reach, pose.y - reach);
-            let c0 = ((lo_x - g.origin_x) / g.resolution).floor().max(0.0) as usize;
-            let r0 = ((lo_y - g.origin_y) / g.resolution).floor().max(0.0) as usize;
-            let c1 = (((pose.x + reach - g.origin_x) / g.resolution).ceil().max(0.0) as usize).min(g.cols);
-            let r1 = (((pose.y + reach - g.origin_y) / g.resolution).ceil().max(0.0) as usize).min(g.rows);
-            for r in r0..r1 {
-                for c in c0..c1 {
+            let (cols, rows) = cells_around(&g, pose.position(), reach);
+            for r in rows {
+                for c in cols.clone() {
                     if !*hazard.get(c, r) {
                         continue;
                     }
@@ -1370,12 +1379,9 @@ impl RoverBug {
         }
         let reach = half_l.hypot(half_w);
         for &(pose, _) in &self.swept {
-            let c0 = ((pose.x - reach - g.origin_x) / g.resolution).floor().max(0.0) as usize;
-            let r0 = ((pose.y - reach - g.origin_y) / g.resolution).floor().max(0.0) as usize;
-            let c1 = (((pose.x + reach - g.origin_x) / g.resolution).ceil().max(0.0) as usize).min(g.cols);
-            let r1 = (((pose.y + reach - g.origin_y) / g.resolution).ceil().max(0.0) as usize).min(g.rows);
-            for r in r0..r1 {
-                for c in c0..c1 {
+            let (cols, rows) = cells_around(&g, pose.position(), reach);
+            for r in rows {
+                for c in cols.clone() {
                     let (cx, cy) = g.center(c, r);
                     let b = pose.inverse_transform(Point2::new(cx, cy));
                     if b.x.abs() <= half_l && b.y.abs() <= half_w {
@@ -1871,6 +1877,21 @@ fn first_unseen_pose(
     })
 }
 
+/// The column and row ranges of the cells of grid `g` within the square of half-side `reach`
+/// around `p`, clipped to the grid.
+fn cells_around(
+    g: &rovernav_core::GridGeometry,
+    p: Point2,
+    reach: f64,
+) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let index = |v: f64, origin: f64| ((v - origin) / g.resolution).max(0.0);
+    let c0 = index(p.x - reach, g.origin_x).floor() as usize;
+    let r0 = index(p.y - reach, g.origin_y).floor() as usize;
+    let c1 = (index(p.x + reach, g.origin_x).ceil() as usize).min(g.cols);
+    let r1 = (index(p.y + reach, g.origin_y).ceil() as usize).min(g.rows);
+    (c0..c1, r0..r1)
+}
+
 /// Euclidean distance from `p` to a C-obstacle's hull (the hazard cells' convex hull, before
 /// growth); 0 inside it.
 fn hull_distance(o: &CObstacle, p: Point2) -> f64 {
@@ -2255,6 +2276,16 @@ mod tests {
         bug.clear_swept(&mut mask);
         let (c, r) = mask.geometry.cell_of(-1.25, 0.05).unwrap();
         assert!(*mask.get(c, r), "forgotten ground keeps its hazard");
+    }
+
+    #[test]
+    fn growth_radius_replaces_the_circumscribed_radius_and_keeps_the_safety_buffer() {
+        let rover = RoverConfig::default();
+        let paper = c_obstacle_terrain(&rover, &RoverBugConfig::default());
+        // The 0.8 x 0.6 m body's circumscribed radius is 0.5 m.
+        assert!((paper.growth() - (0.5 * 0.8f64.hypot(0.6) + 0.1)).abs() < 1e-12);
+        let config = RoverBugConfig { growth_radius: 0.3, ..RoverBugConfig::default() };
+        assert!((c_obstacle_terrain(&rover, &config).growth() - 0.4).abs() < 1e-12);
     }
 
     /// A 45-degree mast wedge along +x from the origin, sensed from 1 to 5 m.
