@@ -15,6 +15,18 @@ fn rock(x: f64, y: f64, diameter: f64) -> Rock {
 
 /// Runs RoverBug on a flat 0.05 m DEM of `size` metres with `rocks`.
 fn run(size: (f64, f64), rocks: Vec<Rock>, start: Pose2, goal: Point2, tolerance: f64) -> RunOutput {
+    run_with(size, rocks, start, goal, tolerance, Default::default())
+}
+
+/// [`run`] with RoverBug parameters.
+fn run_with(
+    size: (f64, f64),
+    rocks: Vec<Rock>,
+    start: Pose2,
+    goal: Point2,
+    tolerance: f64,
+    navigator_params: rovernav_navigation::NavigatorParams,
+) -> RunOutput {
     let res = 0.05;
     let mut dem = Dem::flat((size.0 / res) as usize, (size.1 / res) as usize, res, 0.0);
     add_rocks(&mut dem, &rocks);
@@ -32,7 +44,7 @@ fn run(size: (f64, f64), rocks: Vec<Rock>, start: Pose2, goal: Point2, tolerance
         time_limit_s: 3600.0,
         max_cycles: 3000,
         name: "roverbug-scenario".into(),
-        navigator_params: Default::default(),
+        navigator_params,
     };
     run_world(world, &settings, "roverbug scenario", &mut |_| {}).expect("run")
 }
@@ -108,21 +120,40 @@ fn u_shaped_trap_is_escaped_by_boundary_following() {
     assert_eq!(out.report.hazard_contacts, 0);
 }
 
-#[test]
-fn goal_inside_a_ring_of_rocks_is_unreachable() {
-    let c = Point2::new(10.0, 8.0);
-    // 16 separate rocks on a 3 m circle (1.17 m apart, 0.57 m gaps): the grown C-obstacles
-    // close the ring though each rock stays a distinct obstacle.
-    let rocks: Vec<Rock> = (0..16)
+/// 16 separate rocks on a 3 m circle around `c` (1.17 m apart, 0.57 m gaps): the grown
+/// C-obstacles close the ring though each rock stays a distinct obstacle.
+fn ring_of_rocks(c: Point2) -> Vec<Rock> {
+    (0..16)
         .map(|i| {
             let t = i as f64 * std::f64::consts::TAU / 16.0;
             rock(c.x + 3.0 * t.cos(), c.y + 3.0 * t.sin(), 0.6)
         })
-        .collect();
-    let out = run((20.0, 16.0), rocks, Pose2::new(1.5, 8.0, 0.0), c, 0.3);
+        .collect()
+}
+
+#[test]
+fn goal_inside_a_ring_of_rocks_is_unreachable() {
+    let c = Point2::new(10.0, 8.0);
+    let out = run((20.0, 16.0), ring_of_rocks(c), Pose2::new(1.5, 8.0, 0.0), c, 0.3);
     assert_eq!(out.report.outcome, "unreachable", "{}", out.report.message);
     assert_eq!(out.report.hazard_contacts, 0);
     // Never inside the ring.
+    assert!(closest_approach(&out, c) > 2.7, "{}", closest_approach(&out, c));
+}
+
+/// With `unseen_looks` the first drive stopped a metre short of where it used to, and from
+/// there the mast saw the ring's far side over its 0.35 m rocks: V_loop was taken among all
+/// the blocking obstacle's boundary vertices and lay on the ring's inner side, 2.3 m from the
+/// goal, which the rover following the outer side never came back near, so the loop never
+/// closed and the run timed out. V_loop is now the extreme vertex the rover sees across free
+/// space (the paper's near side of the boundary): the loop closes and the run halts.
+#[test]
+fn ring_with_unseen_looks_v_loop_on_the_far_side_never_closed_the_loop() {
+    let c = Point2::new(10.0, 8.0);
+    let params = [("unseen_looks".to_string(), 2.0)].into();
+    let out = run_with((20.0, 16.0), ring_of_rocks(c), Pose2::new(1.5, 8.0, 0.0), c, 0.3, params);
+    assert_eq!(out.report.outcome, "unreachable", "{}", out.report.message);
+    assert_eq!(out.report.hazard_contacts, 0);
     assert!(closest_approach(&out, c) > 2.7, "{}", closest_approach(&out, c));
 }
 

@@ -1167,8 +1167,15 @@ impl RoverBug {
             return None;
         }
         let d_reach = nodes.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
+        // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
+        // node in the negative sense that the rover sees across free space. Over low rocks the
+        // mast also sees the far side of an encircling obstacle, whose vertices the rover,
+        // following the near side, never comes back to.
+        let near: Vec<usize> =
+            nodes.iter().copied().filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i)).collect();
+        let pool = if near.is_empty() { &nodes } else { &near };
         let other =
-            nodes.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
+            pool.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
         // The target is a sensed node joined to the rover by a sensed free segment: no cut.
         Some((vec![x, target], d_reach, other))
     }
