@@ -87,6 +87,17 @@
 //!   it stands by a free, sensed segment, at no further cost (like the vertices of a
 //!   C-obstacle containing the goal).
 //!
+//! * every forward drive keeps the body over sensed ground (`unseen_looks`): the local
+//!   tangent graph needs only the path's centre line in the wedge, so a subpath along a
+//!   wedge's bounding ray, behind a rock or across the gaps between an image's far rows sweeps
+//!   the body over ground no image covered. The seen part of the drive goes ahead; short of
+//!   that the next step also looks at the unseen ground, and after two looks from one place
+//!   the drive counts as refused;
+//! * the mast sees over low rocks, so the blocking obstacle's far side is in view, which a
+//!   Bug algorithm's planar sensor never shows. V_loop and (with `near_side_reach`) d_reach
+//!   are taken on the near side, among the boundary vertices the rover sees across free
+//!   space; the way to a node that beats d_reach must lie on sensed ground.
+//!
 //! Mission keep-out polygons are C-obstacles like sensed ones (their hulls, grown alike).
 
 use crate::params::{Field, Param, Unit, turn_threshold_param};
@@ -179,7 +190,7 @@ pub struct RoverBugConfig {
     /// buffer (0 disables squeezing).
     pub squeeze_views: u32,
     /// Looks at unseen ground from one place before a forward drive over it counts as refused
-    /// (0, the default, disables the check that the ground under the body of every forward
+    /// (2, the default; 0 disables the check that the ground under the body of every forward
     /// drive has been sensed; see `first_unseen` and README.md for what it measured).
     pub unseen_looks: u32,
     /// Length of the latest driving (m) over whose swept body the safety layer's hazard cells
@@ -196,6 +207,12 @@ pub struct RoverBugConfig {
     /// lets the rover's disc through narrower gaps and leaves turning to the safety layer's
     /// body-outline check (README.md, session 17: more arrivals, twice the contacts).
     pub growth_radius: f64,
+    /// Boundary following on the near side of the boundary (1, the default): d_reach over the
+    /// boundary vertices the rover sees across free space, a way to a leaving node only over
+    /// sensed ground, and boundary following kept across an escape. 0: d_reach over every
+    /// vertex of the blocking obstacle in view, far side included, and an escape restarts
+    /// from motion-to-goal (README.md, session 19).
+    pub near_side_reach: u32,
 }
 
 impl Default for RoverBugConfig {
@@ -221,10 +238,11 @@ impl Default for RoverBugConfig {
             escape_distance: 0.4,
             confirm_fraction: 0.3,
             squeeze_views: 2,
-            unseen_looks: 0,
+            unseen_looks: 2,
             swept_memory: 0.0,
             swept_inset: 0.1,
             growth_radius: 0.0,
+            near_side_reach: 1,
         }
     }
 }
@@ -372,6 +390,12 @@ impl RoverBugConfig {
                 doc: "radius C-obstacles are grown by before the safety buffer (0: the rover's circumscribed radius)",
                 unit: Metres,
                 field: |c| Field::Real(&mut c.growth_radius),
+            },
+            Param {
+                name: "near_side_reach",
+                doc: "1: d_reach over the boundary vertices seen across free space, leaving only over sensed ground, boundary following kept across an escape; 0: d_reach over every boundary vertex in view",
+                unit: Count,
+                field: |c| Field::U32(&mut c.near_side_reach),
             },
         ]
     }
@@ -1166,7 +1190,6 @@ impl RoverBug {
         if !self.interior(target) || (virtual_mode && !self.free_past(x, target)) {
             return None;
         }
-        let d_reach = nodes.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
         // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
         // node in the negative sense that the rover sees across free space. Over low rocks the
         // mast also sees the far side of an encircling obstacle, whose vertices the rover,
@@ -1174,6 +1197,12 @@ impl RoverBug {
         let near: Vec<usize> =
             nodes.iter().copied().filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i)).collect();
         let pool = if near.is_empty() { &nodes } else { &near };
+        // d_reach, "the closest distance to T encountered so far on ∂O": on the near side too
+        // (`near_side_reach`). Over every boundary vertex in view, far side included, it can
+        // be metres nearer the goal than any boundary the rover follows in a rock field, so
+        // that the rover never leaves.
+        let reach_pool = if self.config.near_side_reach > 0 { pool } else { &nodes };
+        let d_reach = reach_pool.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
         let other =
             pool.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
         // The target is a sensed node joined to the rover by a sensed free segment: no cut.
@@ -1485,7 +1514,12 @@ impl RoverBug {
         self.escapes = (count, x);
         self.remember(x);
         self.finish = None;
-        self.mode = Mode::MotionToGoal;
+        // The short drive out is a motion, not a decision of the planner: boundary following
+        // goes on in the same sense toward the same V_loop (a restart would choose the sense
+        // afresh, and inside a U-shaped trap the shorter side flips from place to place).
+        if self.config.near_side_reach == 0 || !matches!(self.mode, Mode::Normal { .. }) {
+            self.mode = Mode::MotionToGoal;
+        }
         self.last_motion = Some(distance.signum());
         self.drive_from = Some(x);
         Some(NavCommand::Drive { distance, curvature: 0.0, guard: DriveGuard::default() })
@@ -1729,9 +1763,18 @@ impl RoverBug {
         // Leaving condition: a reachable node of G1 closer to the goal than d_reach.
         let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
         let limit = d_reach - self.config.leave_margin;
-        if let Some(path) = self.search(&ltg, goal, &|n: &Node| {
+        let leave = self.search(&ltg, goal, &|n: &Node| {
             n.arrival || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < limit)
-        }) {
+        });
+        // The way to a node that beats d_reach must lie on sensed ground: beyond the cut radius
+        // the tangent graph also crosses ground no image covered, where an encircling
+        // obstacle's rocks have no C-obstacles, and a leave through it would restart boundary
+        // following (with a new V_loop) each time the rover drives up to it.
+        let leave = leave.filter(|path| {
+            self.config.near_side_reach == 0
+                || path.windows(2).all(|w| self.segment_sensed(ltg.nodes[w[0]].p, ltg.nodes[w[1]].p))
+        });
+        if let Some(path) = leave {
             let end = ltg.nodes[*path.last().expect("non-empty path")];
             self.d_leave = Some(end.p.dist(goal));
             self.been.clear();
@@ -2110,6 +2153,26 @@ mod tests {
         let len: f64 = pts.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>() + pts.last().unwrap().dist(goal);
         let expect = 2.0f64.hypot(0.5) + 1.0 + 1.0f64.hypot(0.5);
         assert!((len - expect).abs() < 1e-3, "{len} vs {expect}: {pts:?}");
+    }
+
+    #[test]
+    fn d_reach_on_the_near_side_leaves_out_the_vertices_seen_over_the_obstacle() {
+        // Square [2,3]x[-0.5,0.5] between the rover (0,0) and the goal (4,0). Its near corners
+        // (2,±0.5) are seen across free space, 2.0616 m from the goal; its far corners (3,±0.5)
+        // are in view too (a mast sees over low rocks) but only past the square, 1.1180 m from
+        // the goal. V_loop, the extreme vertex in the negative sense, is a near corner.
+        let goal = Point2::new(4.0, 0.0);
+        let x = Point2::new(0.0, 0.0);
+        let mut bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
+        bug.config.near_side_reach = 0;
+        let (path, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
+        assert!(path.last().unwrap().dist(Point2::new(2.0, 0.5)) < 1e-9, "{path:?}");
+        assert!((d_reach - 1.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
+        assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
+        bug.config.near_side_reach = 1;
+        let (_, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
+        assert!((d_reach - 2.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
+        assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
     }
 
     #[test]
