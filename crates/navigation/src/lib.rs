@@ -163,6 +163,7 @@ mod tests {
                 params::Unit::Fraction | params::Unit::CellSize => 0.5,
                 params::Unit::Degrees if before[i] == 30.0 => 45.0,
                 params::Unit::Degrees => 30.0,
+                params::Unit::Switch => 1.0 - before[i],
                 _ => before[i] + 1.0,
             };
             let one: NavigatorParams = [(p.name.to_string(), value)].into();

@@ -26,6 +26,8 @@ pub enum Unit {
     Count,
     /// A weight or gain, zero or more.
     Weight,
+    /// On (1) or off (0).
+    Switch,
 }
 
 impl Unit {
@@ -39,6 +41,7 @@ impl Unit {
             Unit::Fraction => "fraction, (0, 1]",
             Unit::Count => "count, whole, >= 0",
             Unit::Weight => ">= 0",
+            Unit::Switch => "0 (off) or 1 (on)",
         }
     }
 }
@@ -53,6 +56,8 @@ pub enum Field<'a> {
     U64(&'a mut u64),
     /// A size count.
     Usize(&'a mut usize),
+    /// An on/off setting ([`Unit::Switch`]).
+    Bool(&'a mut bool),
 }
 
 /// One parameter of a navigator's config type `C`.
@@ -158,6 +163,7 @@ pub fn apply<C: Clone>(
                 Unit::CellSize => (0.02..=1.0).contains(&value),
                 Unit::Degrees => (0.0..=180.0).contains(&value),
                 Unit::Fraction => value > 0.0 && value <= 1.0,
+                Unit::Switch => value == 0.0 || value == 1.0,
             };
         if !ok {
             return Err(invalid());
@@ -169,6 +175,7 @@ pub fn apply<C: Clone>(
             Field::U32(f) if whole && value <= u32::MAX as f64 => *f = value as u32,
             Field::U64(f) if whole && value <= u64::MAX as f64 => *f = value as u64,
             Field::Usize(f) if whole && value <= usize::MAX as f64 => *f = value as usize,
+            Field::Bool(f) => *f = value == 1.0,
             _ => return Err(invalid()),
         }
     }
@@ -218,6 +225,7 @@ pub fn value<C>(config: &mut C, param: &Param<C>) -> f64 {
         Field::U32(f) => *f as f64,
         Field::U64(f) => *f as f64,
         Field::Usize(f) => *f as f64,
+        Field::Bool(f) => f64::from(u8::from(*f)),
     }
 }
 
@@ -241,6 +249,7 @@ mod tests {
         buffer: f64,
         angle: f64,
         steps: u32,
+        on: bool,
     }
 
     fn table() -> Vec<Param<Demo>> {
@@ -258,6 +267,7 @@ mod tests {
                 field: |c| Field::Real(&mut c.angle),
             },
             Param { name: "steps", doc: "steps", unit: Unit::Count, field: |c| Field::U32(&mut c.steps) },
+            Param { name: "on", doc: "switch", unit: Unit::Switch, field: |c| Field::Bool(&mut c.on) },
         ]
     }
 
@@ -267,22 +277,34 @@ mod tests {
 
     #[test]
     fn values_convert_to_the_fields_units() {
-        let mut c = Demo { buffer: 0.1, angle: 0.0, steps: 1 };
-        apply("demo", &mut c, &table(), &params(&[("buffer_m", 0.3), ("angle_deg", 90.0), ("steps", 7.0)]))
-            .unwrap();
+        let mut c = Demo { buffer: 0.1, angle: 0.0, steps: 1, on: true };
+        let given = params(&[("buffer_m", 0.3), ("angle_deg", 90.0), ("steps", 7.0), ("on", 0.0)]);
+        apply("demo", &mut c, &table(), &given).unwrap();
         assert_eq!(c.buffer, 0.3);
         assert!((c.angle - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         assert_eq!(c.steps, 7);
+        assert!(!c.on);
+        assert_eq!(value(&mut c, &table()[3]), 0.0);
+        apply("demo", &mut c, &table(), &params(&[("on", 1.0)])).unwrap();
+        assert!(c.on);
+        assert_eq!(value(&mut c, &table()[3]), 1.0);
     }
 
     #[test]
     fn a_wrong_name_or_value_names_it_and_changes_nothing() {
-        let before = Demo { buffer: 0.1, angle: 0.0, steps: 1 };
+        let before = Demo { buffer: 0.1, angle: 0.0, steps: 1, on: false };
         let mut c = before.clone();
         let err = apply("demo", &mut c, &table(), &params(&[("bufer_m", 0.3)])).unwrap_err();
         assert!(err.to_string().contains("no parameter `bufer_m`"), "{err}");
-        assert!(err.to_string().contains("buffer_m, angle_deg, steps"), "{err}");
-        for bad in [("buffer_m", -0.1), ("buffer_m", f64::NAN), ("angle_deg", 200.0), ("steps", 2.5)] {
+        assert!(err.to_string().contains("buffer_m, angle_deg, steps, on"), "{err}");
+        for bad in [
+            ("buffer_m", -0.1),
+            ("buffer_m", f64::NAN),
+            ("angle_deg", 200.0),
+            ("steps", 2.5),
+            ("on", 2.0),
+            ("on", 0.5),
+        ] {
             // The valid "angle_deg" is applied first where the bad entry is another one, so a
             // partial update would show.
             let err = apply("demo", &mut c, &table(), &params(&[("angle_deg", 10.0), bad])).unwrap_err();

@@ -212,7 +212,7 @@ pub struct RoverBugConfig {
     /// sensed ground, and boundary following kept across an escape. 0: d_reach over every
     /// vertex of the blocking obstacle in view, far side included, and an escape restarts
     /// from motion-to-goal (README.md, session 19).
-    pub near_side_reach: u32,
+    pub near_side_reach: bool,
 }
 
 impl Default for RoverBugConfig {
@@ -242,7 +242,7 @@ impl Default for RoverBugConfig {
             swept_memory: 0.0,
             swept_inset: 0.1,
             growth_radius: 0.0,
-            near_side_reach: 1,
+            near_side_reach: true,
         }
     }
 }
@@ -394,8 +394,8 @@ impl RoverBugConfig {
             Param {
                 name: "near_side_reach",
                 doc: "1: d_reach over the boundary vertices seen across free space, leaving only over sensed ground, boundary following kept across an escape; 0: d_reach over every boundary vertex in view",
-                unit: Count,
-                field: |c| Field::U32(&mut c.near_side_reach),
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.near_side_reach),
             },
         ]
     }
@@ -1201,7 +1201,7 @@ impl RoverBug {
         // (`near_side_reach`). Over every boundary vertex in view, far side included, it can
         // be metres nearer the goal than any boundary the rover follows in a rock field, so
         // that the rover never leaves.
-        let reach_pool = if self.config.near_side_reach > 0 { pool } else { &nodes };
+        let reach_pool = if self.config.near_side_reach { pool } else { &nodes };
         let d_reach = reach_pool.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
         let other =
             pool.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
@@ -1517,7 +1517,7 @@ impl RoverBug {
         // The short drive out is a motion, not a decision of the planner: boundary following
         // goes on in the same sense toward the same V_loop (a restart would choose the sense
         // afresh, and inside a U-shaped trap the shorter side flips from place to place).
-        if self.config.near_side_reach == 0 || !matches!(self.mode, Mode::Normal { .. }) {
+        if !self.config.near_side_reach || !matches!(self.mode, Mode::Normal { .. }) {
             self.mode = Mode::MotionToGoal;
         }
         self.last_motion = Some(distance.signum());
@@ -1771,7 +1771,7 @@ impl RoverBug {
         // obstacle's rocks have no C-obstacles, and a leave through it would restart boundary
         // following (with a new V_loop) each time the rover drives up to it.
         let leave = leave.filter(|path| {
-            self.config.near_side_reach == 0
+            !self.config.near_side_reach
                 || path.windows(2).all(|w| self.segment_sensed(ltg.nodes[w[0]].p, ltg.nodes[w[1]].p))
         });
         if let Some(path) = leave {
@@ -2164,12 +2164,12 @@ mod tests {
         let goal = Point2::new(4.0, 0.0);
         let x = Point2::new(0.0, 0.0);
         let mut bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
-        bug.config.near_side_reach = 0;
+        bug.config.near_side_reach = false;
         let (path, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
         assert!(path.last().unwrap().dist(Point2::new(2.0, 0.5)) < 1e-9, "{path:?}");
         assert!((d_reach - 1.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
         assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
-        bug.config.near_side_reach = 1;
+        bug.config.near_side_reach = true;
         let (_, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
         assert!((d_reach - 2.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
         assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
