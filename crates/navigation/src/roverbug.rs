@@ -1173,10 +1173,14 @@ impl RoverBug {
         let comp = self.blocking_component(x, goal)?;
         let nodes = Self::boundary_nodes(&ltg, &comp);
         let key = |i: usize| s * Self::rel_angle(x, ltg.nodes[i].p, reference);
-        let direct: Vec<usize> = nodes
+        // The near side of the boundary: the vertices the rover sees across free space. Over
+        // low rocks the mast also sees the far side, which a planar sensor never shows.
+        let near: Vec<usize> =
+            nodes.iter().copied().filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i)).collect();
+        let direct: Vec<usize> = near
             .iter()
             .copied()
-            .filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i) && ltg.nodes[i].p.dist(x) > 0.1)
+            .filter(|&i| ltg.nodes[i].p.dist(x) > 0.1)
             // Never back to where this segment has been, nor to a restart point.
             .filter(|&i| self.away_from_visits(ltg.nodes[i].p, 0.3))
             // Onward in the positive sense: on that side of the goal direction.
@@ -1191,20 +1195,17 @@ impl RoverBug {
             return None;
         }
         // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
-        // node in the negative sense that the rover sees across free space. Over low rocks the
-        // mast also sees the far side of an encircling obstacle, whose vertices the rover,
-        // following the near side, never comes back to.
-        let near: Vec<usize> =
-            nodes.iter().copied().filter(|&i| ltg.adj[0].iter().any(|&(j, _)| j == i)).collect();
-        let pool = if near.is_empty() { &nodes } else { &near };
+        // near vertex in the negative sense. Taken among all, it can lie on the far side of an
+        // encircling obstacle, which the rover following the near side never comes back to.
+        // `near` holds the target, so it is not empty.
         // d_reach, "the closest distance to T encountered so far on ∂O": on the near side too
         // (`near_side_reach`). Over every boundary vertex in view, far side included, it can
         // be metres nearer the goal than any boundary the rover follows in a rock field, so
         // that the rover never leaves.
-        let reach_pool = if self.config.near_side_reach { pool } else { &nodes };
+        let reach_pool = if self.config.near_side_reach { &near } else { &nodes };
         let d_reach = reach_pool.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
         let other =
-            pool.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
+            near.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
         // The target is a sensed node joined to the rover by a sensed free segment: no cut.
         Some((vec![x, target], d_reach, other))
     }
@@ -2160,7 +2161,10 @@ mod tests {
         // Square [2,3]x[-0.5,0.5] between the rover (0,0) and the goal (4,0). Its near corners
         // (2,±0.5) are seen across free space, 2.0616 m from the goal; its far corners (3,±0.5)
         // are in view too (a mast sees over low rocks) but only past the square, 1.1180 m from
-        // the goal. V_loop, the extreme vertex in the negative sense, is a near corner.
+        // the goal. V_loop, the extreme vertex in the negative sense, is the near corner
+        // (2,-0.5) whichever vertices it is taken among here; the ring scenario
+        // `ring_with_unseen_looks_v_loop_on_the_far_side_never_closed_the_loop` is the one that
+        // tells the near side from all of them.
         let goal = Point2::new(4.0, 0.0);
         let x = Point2::new(0.0, 0.0);
         let mut bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
