@@ -1210,19 +1210,29 @@ impl RoverBug {
         Some((vec![x, target], d_reach, other))
     }
 
-    /// The most extreme node in the sense `s` (from the goal direction) joined to the rover by
-    /// a free tangent segment and away from every position of this boundary-following segment
-    /// and every restart point.
+    /// The step of boundary following when the gaze has turned all around without a silhouette
+    /// vertex: the first node past the goal direction in the positive sense `s` joined to the
+    /// rover by a free tangent segment, away from every position of this boundary-following
+    /// segment and every restart point; the most extreme such node in the sense when none lies
+    /// on the positive side. Turning from the goal direction only as far as the way is blocked
+    /// keeps the obstacle at hand, as a wall follower does: the most extreme node, up to half a
+    /// turn from the goal, led the rover away from it (seed 10 of the default yard: 8 m south
+    /// of a goal to the north-east; seeds 13 and 19 timed out wandering).
     fn fallback_step(&self, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
         let ltg = self.build_ltg(x, goal);
         let reference = goal.sub(x).angle();
-        let key = |p: Point2| s * Self::rel_angle(x, p, reference);
-        ltg.adj[0]
+        let key = |p: &Point2| s * Self::rel_angle(x, *p, reference);
+        let candidates: Vec<Point2> = ltg.adj[0]
             .iter()
             .map(|&(j, _)| ltg.nodes[j].p)
             .filter(|&p| p.dist(x) > 0.2 && self.away_from_visits(p, 0.5))
-            .max_by(|a, b| key(*a).total_cmp(&key(*b)))
-            .map(|p| vec![x, p])
+            .collect();
+        candidates
+            .iter()
+            .filter(|p| key(p) > -0.05)
+            .min_by(|a, b| key(a).total_cmp(&key(b)))
+            .or_else(|| candidates.iter().max_by(|a, b| key(a).total_cmp(&key(b))))
+            .map(|&p| vec![x, p])
     }
 
     /// Whether `p` lies farther than `radius` from every position of this boundary-following
@@ -2560,6 +2570,36 @@ mod tests {
         assert!(bug.been.is_empty());
         bug.visited.clear();
         assert!(first_exit_waypoint(&bug, goal).y > 0.0);
+    }
+
+    #[test]
+    fn seed_10_boundary_following_fallback_turned_away_from_the_goal() {
+        // Square [2,3]x[-0.5,0.5] across the line to the goal (6,0), and a square
+        // [1.2,1.8]x[1.7,2.3] off to the left. By hand, the nodes joined to the rover are the
+        // near corners (2,±0.5) at ±14.0 degrees from the goal direction and the left square's
+        // silhouette corners (1.8,1.7) at 43.4 and (1.2,2.3) at 62.4 degrees. Counter-clockwise
+        // the fallback hugs the blocking square at (2,0.5); turning as far as possible it took
+        // (1.2,2.3), away from the goal.
+        let goal = Point2::new(6.0, 0.0);
+        let x = Point2::new(0.0, 0.0);
+        // Both squares ungrown, with each corner once (a zero growth repeats the corners, whose
+        // zero-length edges then pass any line as tangent).
+        let squares = [square(2.5, 0.0, 0.5), square(1.5, 2.0, 0.3)].map(|mut o| {
+            o.vertices = o.hull.clone();
+            o.labels.truncate(o.vertices.len());
+            o
+        });
+        let mut bug = bug_with(squares.to_vec());
+        let step = |bug: &RoverBug, s: f64| bug.fallback_step(x, goal, s).expect("a step")[1];
+        let near = |a: Point2, b: Point2| a.dist(b) < 1e-6;
+        assert!(near(step(&bug, 1.0), Point2::new(2.0, 0.5)), "{:?}", step(&bug, 1.0));
+        assert!(near(step(&bug, -1.0), Point2::new(2.0, -0.5)), "{:?}", step(&bug, -1.0));
+        // With that corner visited, the next one round in the positive sense.
+        bug.visited = vec![x, Point2::new(2.0, 0.5)];
+        assert!(near(step(&bug, 1.0), Point2::new(1.8, 1.7)), "{:?}", step(&bug, 1.0));
+        // Nothing on the positive side: the most extreme node on the other.
+        bug.visited.extend([Point2::new(1.8, 1.7), Point2::new(1.2, 2.3)]);
+        assert!(near(step(&bug, 1.0), Point2::new(2.0, -0.5)), "{:?}", step(&bug, 1.0));
     }
 
     #[test]
