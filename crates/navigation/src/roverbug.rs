@@ -51,8 +51,9 @@
 //!   leave across the margin but never across the obstacle's own hull; inside a hull itself
 //!   (a crater rim around it) it has no free way out;
 //! * when normal boundary following has turned the gaze all around without a boundary vertex
-//!   in the interior of the conglomerate wedge (the paper aborts), it steps to the most extreme
-//!   directly reachable node not yet visited; when there is none, or when virtual boundary
+//!   in the interior of the conglomerate wedge (the paper aborts), it steps to the first
+//!   directly reachable node not yet visited past the goal direction in the positive sense (a
+//!   wall follower's step); when there is none, or when virtual boundary
 //!   following finds no silhouette (in clutter the C-obstacles hide each other's), it takes the
 //!   LTG path to an unvisited node minimising path length plus distance to the goal (the
 //!   TangentBug heuristic), and halts only when there is no such node;
@@ -1217,7 +1218,7 @@ impl RoverBug {
     /// on the positive side. Turning from the goal direction only as far as the way is blocked
     /// keeps the obstacle at hand, as a wall follower does: the most extreme node, up to half a
     /// turn from the goal, led the rover away from it (seed 10 of the default yard: 8 m south
-    /// of a goal to the north-east; seeds 13 and 19 timed out wandering).
+    /// of a goal to the north-east and back).
     fn fallback_step(&self, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
         let ltg = self.build_ltg(x, goal);
         let reference = goal.sub(x).angle();
@@ -1818,8 +1819,8 @@ impl RoverBug {
         }
         let Some((next, angle)) = self.next_scan(&scans, sense) else {
             // The gaze has turned all around without a silhouette vertex in the interior of the
-            // conglomerate wedge (paper: abort). In clutter, step instead to the most extreme
-            // directly reachable node not yet visited; abort only when there is none.
+            // conglomerate wedge (paper: abort). In clutter, step instead along the boundary to
+            // a directly reachable node not yet visited; abort only when there is none.
             if let Some(path) = self.fallback_step(x, goal, sense).or_else(|| self.best_exit(x, goal)) {
                 self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
                 self.execute(path);
@@ -2597,7 +2598,7 @@ mod tests {
         // With that corner visited, the next one round in the positive sense.
         bug.visited = vec![x, Point2::new(2.0, 0.5)];
         assert!(near(step(&bug, 1.0), Point2::new(1.8, 1.7)), "{:?}", step(&bug, 1.0));
-        // Nothing on the positive side: the most extreme node on the other.
+        // Nothing left on the positive side: a node on the other.
         bug.visited.extend([Point2::new(1.8, 1.7), Point2::new(1.2, 2.3)]);
         assert!(near(step(&bug, 1.0), Point2::new(2.0, -0.5)), "{:?}", step(&bug, 1.0));
     }
