@@ -234,6 +234,17 @@ fn seed_19_with_swept_memory_the_rover_backs_out_over_its_own_trail_and_reaches_
     let _ = assert_default_yard_seed_reached_clean_with(19, params);
 }
 
+/// Seed 19 of the default Mars yard: a rock cluster south of the goal. Boundary following
+/// round it turned the gaze all around without a silhouette vertex, again and again, and each
+/// time stepped along the boundary, which led it up to 10 m from the goal until the mission's
+/// time limit. With `wander_limit_m` (2 m) the step heads for the goal once the rover is that
+/// much farther from it than d_reach, and the rover reaches the goal without a contact.
+#[test]
+#[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
+fn seed_19_boundary_following_wandered_away_from_the_goal_until_the_time_limit() {
+    let _ = assert_default_yard_seed_reached_clean(19);
+}
+
 /// Runs RoverBug on a seed of the default Mars yard and checks, against the simulator, that the
 /// seed has a safe path and the rover reached the goal without a hazard contact.
 fn assert_default_yard_seed_reached_clean(seed: u64) -> rovernav_executive::Report {

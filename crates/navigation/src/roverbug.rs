@@ -214,6 +214,11 @@ pub struct RoverBugConfig {
     /// vertex of the blocking obstacle in view, far side included, and an escape restarts
     /// from motion-to-goal (README.md, session 19).
     pub near_side_reach: bool,
+    /// How much farther from the goal than d_reach (m) boundary following may have led before
+    /// its step, when the gaze has turned all around without a silhouette vertex, is the
+    /// TangentBug way on (path length plus distance to the goal) rather than the wall
+    /// follower's (0 disables: always the wall follower's; README.md, session 20).
+    pub wander_limit: f64,
 }
 
 impl Default for RoverBugConfig {
@@ -244,6 +249,7 @@ impl Default for RoverBugConfig {
             swept_inset: 0.1,
             growth_radius: 0.0,
             near_side_reach: true,
+            wander_limit: 2.0,
         }
     }
 }
@@ -397,6 +403,12 @@ impl RoverBugConfig {
                 doc: "1: d_reach over the boundary vertices seen across free space, leaving only over sensed ground, boundary following kept across an escape; 0: d_reach over every boundary vertex in view",
                 unit: Switch,
                 field: |c| Field::Bool(&mut c.near_side_reach),
+            },
+            Param {
+                name: "wander_limit_m",
+                doc: "how much farther from the goal than d_reach boundary following may lead before its blocked step is the way on toward the goal rather than along the boundary (0 disables)",
+                unit: Metres,
+                field: |c| Field::Real(&mut c.wander_limit),
             },
         ]
     }
@@ -1236,6 +1248,20 @@ impl RoverBug {
             .map(|&p| vec![x, p])
     }
 
+    /// Boundary following's step when the gaze has turned all around without a silhouette
+    /// vertex: the wall follower's step, then the locally best way on; in the other order once
+    /// the rover is more than `wander_limit` farther from the goal than d_reach. Following a
+    /// boundary away from the goal through clutter, the wall follower's step keeps leading
+    /// away (seed 19 of the default yard wandered until the time limit).
+    fn blocked_step(&self, x: Point2, goal: Point2, sense: f64, d_reach: f64) -> Option<Vec<Point2>> {
+        let limit = self.config.wander_limit;
+        if limit > 0.0 && x.dist(goal) > d_reach + limit {
+            self.best_exit(x, goal).or_else(|| self.fallback_step(x, goal, sense))
+        } else {
+            self.fallback_step(x, goal, sense).or_else(|| self.best_exit(x, goal))
+        }
+    }
+
     /// Whether `p` lies farther than `radius` from every position of this boundary-following
     /// segment and from every restart point since motion-to-goal last made progress.
     fn away_from_visits(&self, p: Point2, radius: f64) -> bool {
@@ -1821,7 +1847,7 @@ impl RoverBug {
             // The gaze has turned all around without a silhouette vertex in the interior of the
             // conglomerate wedge (paper: abort). In clutter, step instead along the boundary to
             // a directly reachable node not yet visited; abort only when there is none.
-            if let Some(path) = self.fallback_step(x, goal, sense).or_else(|| self.best_exit(x, goal)) {
+            if let Some(path) = self.blocked_step(x, goal, sense, d_reach) {
                 self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
                 self.execute(path);
                 return None;
@@ -2601,6 +2627,34 @@ mod tests {
         // Nothing left on the positive side: a node on the other.
         bug.visited.extend([Point2::new(1.8, 1.7), Point2::new(1.2, 2.3)]);
         assert!(near(step(&bug, 1.0), Point2::new(2.0, -0.5)), "{:?}", step(&bug, 1.0));
+    }
+
+    #[test]
+    fn seed_19_far_from_d_reach_the_blocked_step_heads_for_the_goal() {
+        // Square [2,3]x[-0.5,0.5] across the line to the goal (6,-0.2). By hand, the way on by
+        // the lower corners (path plus remaining distance 2.062 + 1 + 3.015 = 6.077 m) beats
+        // the upper ones (6.142 m); counter-clockwise, the wall follower's step is the upper
+        // corner (2,0.5), the first past the goal direction.
+        let goal = Point2::new(6.0, -0.2);
+        let x = Point2::new(0.0, 0.0);
+        let scene = || {
+            let mut o = square(2.5, 0.0, 0.5);
+            o.vertices = o.hull.clone();
+            o.labels.truncate(4);
+            bug_with(vec![o])
+        };
+        let bug = scene();
+        let d = x.dist(goal);
+        let step = |d_reach: f64| bug.blocked_step(x, goal, 1.0, d_reach).expect("a step")[1];
+        let near = |a: Point2, b: Point2| a.dist(b) < 1e-6;
+        // Within the limit of d_reach: along the boundary.
+        assert!(near(step(d - 1.0), Point2::new(2.0, 0.5)), "{:?}", step(d - 1.0));
+        // Led farther than the limit (2 m) from it: toward the goal.
+        assert!(near(step(d - 2.5), Point2::new(2.0, -0.5)), "{:?}", step(d - 2.5));
+        // Disabled, along the boundary however far.
+        let mut off = scene();
+        off.config.wander_limit = 0.0;
+        assert!(near(off.blocked_step(x, goal, 1.0, d - 2.5).expect("a step")[1], Point2::new(2.0, 0.5)));
     }
 
     #[test]
