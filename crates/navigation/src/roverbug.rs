@@ -53,10 +53,12 @@
 //! * when normal boundary following has turned the gaze all around without a boundary vertex
 //!   in the interior of the conglomerate wedge (the paper aborts), it steps to the first
 //!   directly reachable node not yet visited past the goal direction in the positive sense (a
-//!   wall follower's step); when there is none, or when virtual boundary
-//!   following finds no silhouette (in clutter the C-obstacles hide each other's), it takes the
-//!   LTG path to an unvisited node minimising path length plus distance to the goal (the
-//!   TangentBug heuristic), and halts only when there is no such node;
+//!   wall follower's step); when there is none, when boundary following has led it more than
+//!   `wander_limit_m` farther from the goal than d_reach (then before the wall follower's
+//!   step), or when virtual boundary following finds no silhouette (in clutter the
+//!   C-obstacles hide each other's), it takes the LTG path to an unvisited node minimising
+//!   path length plus distance to the goal (the TangentBug heuristic), and halts only when
+//!   there is no step at all;
 //! * the places where boundary following started (Bug's hit points) and where escapes
 //!   started are remembered across the restarts this implementation adds (escapes, retreats),
 //!   while `visited` holds one boundary-following segment only, and forgotten when the
@@ -1845,8 +1847,8 @@ impl RoverBug {
         }
         let Some((next, angle)) = self.next_scan(&scans, sense) else {
             // The gaze has turned all around without a silhouette vertex in the interior of the
-            // conglomerate wedge (paper: abort). In clutter, step instead along the boundary to
-            // a directly reachable node not yet visited; abort only when there is none.
+            // conglomerate wedge (paper: abort). In clutter, step on instead (along the boundary,
+            // or toward the goal once it has led too far away); abort only when there is none.
             if let Some(path) = self.blocked_step(x, goal, sense, d_reach) {
                 self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
                 self.execute(path);
@@ -2168,6 +2170,15 @@ mod tests {
             Point2::new(cx - h, cy + h),
         ];
         CObstacle::from_hull(hull, 0.0, 0.5, 1)
+    }
+
+    /// [`square`] with each corner once: a zero growth repeats the corners, whose zero-length
+    /// edges then pass any line as tangent.
+    fn corner_square(cx: f64, cy: f64, h: f64) -> CObstacle {
+        let mut o = square(cx, cy, h);
+        o.vertices = o.hull.clone();
+        o.labels.truncate(o.vertices.len());
+        o
     }
 
     fn bug_with(obstacles: Vec<CObstacle>) -> RoverBug {
@@ -2609,14 +2620,7 @@ mod tests {
         // (1.2,2.3), away from the goal.
         let goal = Point2::new(6.0, 0.0);
         let x = Point2::new(0.0, 0.0);
-        // Both squares ungrown, with each corner once (a zero growth repeats the corners, whose
-        // zero-length edges then pass any line as tangent).
-        let squares = [square(2.5, 0.0, 0.5), square(1.5, 2.0, 0.3)].map(|mut o| {
-            o.vertices = o.hull.clone();
-            o.labels.truncate(o.vertices.len());
-            o
-        });
-        let mut bug = bug_with(squares.to_vec());
+        let mut bug = bug_with(vec![corner_square(2.5, 0.0, 0.5), corner_square(1.5, 2.0, 0.3)]);
         let step = |bug: &RoverBug, s: f64| bug.fallback_step(x, goal, s).expect("a step")[1];
         let near = |a: Point2, b: Point2| a.dist(b) < 1e-6;
         assert!(near(step(&bug, 1.0), Point2::new(2.0, 0.5)), "{:?}", step(&bug, 1.0));
@@ -2637,12 +2641,7 @@ mod tests {
         // corner (2,0.5), the first past the goal direction.
         let goal = Point2::new(6.0, -0.2);
         let x = Point2::new(0.0, 0.0);
-        let scene = || {
-            let mut o = square(2.5, 0.0, 0.5);
-            o.vertices = o.hull.clone();
-            o.labels.truncate(4);
-            bug_with(vec![o])
-        };
+        let scene = || bug_with(vec![corner_square(2.5, 0.0, 0.5)]);
         let bug = scene();
         let d = x.dist(goal);
         let step = |d_reach: f64| bug.blocked_step(x, goal, 1.0, d_reach).expect("a step")[1];
