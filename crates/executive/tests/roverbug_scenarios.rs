@@ -221,7 +221,8 @@ fn seed_49_with_unseen_looks_the_body_keeps_to_sensed_ground_and_reaches_the_goa
 /// help. With `swept_memory_m` the ground its body has just crossed carries no hazard. It
 /// backs out and reaches the goal without a contact, which the simulator counts. The traverse
 /// that led into that spot is the one without the unseen-ground check and with d_reach over
-/// the whole boundary in view (the defaults until session 19), so the test runs with them.
+/// the whole boundary in view (the defaults until session 19), and with a leaving margin of
+/// 0.1 m (the default until session 20), so the test runs with them.
 #[test]
 #[ignore = "release speed: cargo test --release -p rovernav-executive --test roverbug_scenarios -- --ignored"]
 fn seed_19_with_swept_memory_the_rover_backs_out_over_its_own_trail_and_reaches_the_goal_clean() {
@@ -229,6 +230,7 @@ fn seed_19_with_swept_memory_the_rover_backs_out_over_its_own_trail_and_reaches_
         ("swept_memory_m".to_string(), 3.0),
         ("unseen_looks".to_string(), 0.0),
         ("near_side_reach".to_string(), 0.0),
+        ("leave_margin_m".to_string(), 0.1),
     ]
     .into();
     let _ = assert_default_yard_seed_reached_clean_with(19, params);

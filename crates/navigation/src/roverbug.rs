@@ -152,7 +152,9 @@ pub struct RoverBugConfig {
     pub range_buffer: f64,
     /// Heading error above which the rover turns in place before driving (rad).
     pub turn_threshold: f64,
-    /// How much closer than `d_reach` a node must be to leave boundary following (m).
+    /// How much closer than `d_reach` a node must be to leave boundary following (m); 0, the
+    /// default, is the paper's leaving condition d(V, T) < d_reach (README.md, session 20: 0.1
+    /// m measured no better).
     pub leave_margin: f64,
     /// Angular margin inside the conglomerate wedge's bounding rays for "interior" (rad).
     pub interior_angle: f64,
@@ -231,7 +233,7 @@ impl Default for RoverBugConfig {
             safety_clearance_margin: TOP_HAZARD_MARGIN,
             range_buffer: 1.0,
             turn_threshold: 10f64.to_radians(),
-            leave_margin: 0.1,
+            leave_margin: 0.0,
             interior_angle: 4f64.to_radians(),
             near_visible: 1.0,
             carry_margin: 0.2,
