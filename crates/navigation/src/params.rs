@@ -175,7 +175,7 @@ pub fn apply<C: Clone>(
             Field::U32(f) if whole && value <= u32::MAX as f64 => *f = value as u32,
             Field::U64(f) if whole && value <= u64::MAX as f64 => *f = value as u64,
             Field::Usize(f) if whole && value <= usize::MAX as f64 => *f = value as usize,
-            Field::Bool(f) => *f = value == 1.0,
+            Field::Bool(f) if value == 0.0 || value == 1.0 => *f = value == 1.0,
             _ => return Err(invalid()),
         }
     }

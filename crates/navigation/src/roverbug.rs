@@ -1211,16 +1211,16 @@ impl RoverBug {
         if !self.interior(target) || (virtual_mode && !self.free_past(x, target)) {
             return None;
         }
-        // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
-        // near vertex in the negative sense. Taken among all, it can lie on the far side of an
-        // encircling obstacle, which the rover following the near side never comes back to.
-        // `near` holds the target, so it is not empty.
         // d_reach, "the closest distance to T encountered so far on ∂O": on the near side too
         // (`near_side_reach`). Over every boundary vertex in view, far side included, it can
         // be metres nearer the goal than any boundary the rover follows in a rock field, so
         // that the rover never leaves.
         let reach_pool = if self.config.near_side_reach { &near } else { &nodes };
         let d_reach = reach_pool.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
+        // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
+        // near vertex in the negative sense. Taken among all, it can lie on the far side of an
+        // encircling obstacle, which the rover following the near side never comes back to.
+        // `near` holds the target, so it is not empty.
         let other =
             near.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b))).map_or(x, |i| ltg.nodes[i].p);
         // The target is a sensed node joined to the rover by a sensed free segment: no cut.
@@ -1235,8 +1235,7 @@ impl RoverBug {
     /// keeps the obstacle at hand, as a wall follower does: the most extreme node, up to half a
     /// turn from the goal, led the rover away from it (seed 10 of the default yard: 8 m south
     /// of a goal to the north-east and back).
-    fn fallback_step(&self, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
-        let ltg = self.build_ltg(x, goal);
+    fn fallback_step(&self, ltg: &Ltg, x: Point2, goal: Point2, s: f64) -> Option<Vec<Point2>> {
         let reference = goal.sub(x).angle();
         let key = |p: &Point2| s * Self::rel_angle(x, *p, reference);
         let candidates: Vec<Point2> = ltg.adj[0]
@@ -1257,12 +1256,19 @@ impl RoverBug {
     /// the rover is more than `wander_limit` farther from the goal than d_reach. Following a
     /// boundary away from the goal through clutter, the wall follower's step keeps leading
     /// away (seed 19 of the default yard wandered until the time limit).
-    fn blocked_step(&self, x: Point2, goal: Point2, sense: f64, d_reach: f64) -> Option<Vec<Point2>> {
+    fn blocked_step(
+        &self,
+        ltg: &Ltg,
+        x: Point2,
+        goal: Point2,
+        sense: f64,
+        d_reach: f64,
+    ) -> Option<Vec<Point2>> {
         let limit = self.config.wander_limit;
         if limit > 0.0 && x.dist(goal) > d_reach + limit {
-            self.best_exit(x, goal).or_else(|| self.fallback_step(x, goal, sense))
+            self.best_exit(ltg, x, goal).or_else(|| self.fallback_step(ltg, x, goal, sense))
         } else {
-            self.fallback_step(x, goal, sense).or_else(|| self.best_exit(x, goal))
+            self.fallback_step(ltg, x, goal, sense).or_else(|| self.best_exit(ltg, x, goal))
         }
     }
 
@@ -1281,19 +1287,26 @@ impl RoverBug {
 
     /// The locally best way on (TangentBug's heuristic): the LTG path from the rover to a node
     /// away from every position of this boundary-following segment and every restart point that
-    /// minimises its length plus the node's distance to the goal, cut at the wedge radius.
-    fn best_exit(&self, x: Point2, goal: Point2) -> Option<Vec<Point2>> {
+    /// minimises its length plus the node's distance to the goal, cut at the wedge radius. `ltg`
+    /// is the local tangent graph from `x`.
+    fn best_exit(&self, ltg: &Ltg, x: Point2, goal: Point2) -> Option<Vec<Point2>> {
         // The restart points are a preference: with every way on near one, one near a restart
         // point beats halting.
-        self.best_exit_avoiding(x, goal, &self.been).or_else(|| self.best_exit_avoiding(x, goal, &[]))
+        self.best_exit_avoiding(ltg, x, goal, &self.been)
+            .or_else(|| self.best_exit_avoiding(ltg, x, goal, &[]))
     }
 
     /// [`Self::best_exit`] avoiding this segment's positions and the points `avoid`.
-    fn best_exit_avoiding(&self, x: Point2, goal: Point2, avoid: &[Point2]) -> Option<Vec<Point2>> {
-        let ltg = self.build_ltg(x, goal);
+    fn best_exit_avoiding(
+        &self,
+        ltg: &Ltg,
+        x: Point2,
+        goal: Point2,
+        avoid: &[Point2],
+    ) -> Option<Vec<Point2>> {
         let fresh = |p: Point2| p.dist(x) > 0.2 && self.visited.iter().chain(avoid).all(|q| q.dist(p) > 0.5);
         let path =
-            self.search_with(&ltg, goal, &|i, n: &Node| (i != 0 && fresh(n.p)).then(|| n.p.dist(goal)))?;
+            self.search_with(ltg, goal, &|i, n: &Node| (i != 0 && fresh(n.p)).then(|| n.p.dist(goal)))?;
         let points: Vec<Point2> = path.iter().map(|&i| ltg.nodes[i].p).collect();
         let sub = self.truncate(&points, x);
         (sub.len() >= 2).then_some(sub)
@@ -1338,7 +1351,7 @@ impl RoverBug {
             // No silhouette vertex in the interior of the conglomerate wedge: in clutter the
             // blocking C-obstacles hide each other's silhouettes. Follow the best way on the
             // local tangent graph instead; halt as trapped only when there is none.
-            if let Some(path) = self.best_exit(x, goal) {
+            if let Some(path) = self.best_exit(&self.build_ltg(x, goal), x, goal) {
                 let d_reach = x.dist(goal);
                 self.mode = Mode::Normal { sense, d_reach, v_loop: x, left_loop: false, scans: vec![0] };
                 self.execute(path);
@@ -1851,7 +1864,8 @@ impl RoverBug {
             // The gaze has turned all around without a silhouette vertex in the interior of the
             // conglomerate wedge (paper: abort). In clutter, step on instead (along the boundary,
             // or toward the goal once it has led too far away); abort only when there is none.
-            if let Some(path) = self.blocked_step(x, goal, sense, d_reach) {
+            // The graph built for the leaving condition: nothing it depends on has changed.
+            if let Some(path) = self.blocked_step(&ltg, x, goal, sense, d_reach) {
                 self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans: vec![0] };
                 self.execute(path);
                 return None;
@@ -2571,7 +2585,8 @@ mod tests {
 
     /// The first waypoint of the best way on from the origin toward `goal`.
     fn first_exit_waypoint(bug: &RoverBug, goal: Point2) -> Point2 {
-        let path = bug.best_exit(Point2::new(0.0, 0.0), goal).expect("a way on");
+        let x = Point2::new(0.0, 0.0);
+        let path = bug.best_exit(&bug.build_ltg(x, goal), x, goal).expect("a way on");
         path[1]
     }
 
@@ -2597,8 +2612,9 @@ mod tests {
         // near them still beats halting.
         bug.remember(Point2::new(2.0, -0.5));
         bug.remember(Point2::new(3.0, -0.5));
-        assert!(bug.best_exit_avoiding(x, goal, &bug.been).is_none());
-        assert!(bug.best_exit(x, goal).is_some());
+        let ltg = bug.build_ltg(x, goal);
+        assert!(bug.best_exit_avoiding(&ltg, x, goal, &bug.been).is_none());
+        assert!(bug.best_exit(&ltg, x, goal).is_some());
         // Motion to goal from the start plans round the upper corners again: not progress
         // past the restart points, which stay remembered.
         let remembered = bug.been.len();
@@ -2623,7 +2639,9 @@ mod tests {
         let goal = Point2::new(6.0, 0.0);
         let x = Point2::new(0.0, 0.0);
         let mut bug = bug_with(vec![corner_square(2.5, 0.0, 0.5), corner_square(1.5, 2.0, 0.3)]);
-        let step = |bug: &RoverBug, s: f64| bug.fallback_step(x, goal, s).expect("a step")[1];
+        let step = |bug: &RoverBug, s: f64| {
+            bug.fallback_step(&bug.build_ltg(x, goal), x, goal, s).expect("a step")[1]
+        };
         let near = |a: Point2, b: Point2| a.dist(b) < 1e-6;
         assert!(near(step(&bug, 1.0), Point2::new(2.0, 0.5)), "{:?}", step(&bug, 1.0));
         assert!(near(step(&bug, -1.0), Point2::new(2.0, -0.5)), "{:?}", step(&bug, -1.0));
@@ -2646,7 +2664,8 @@ mod tests {
         let scene = || bug_with(vec![corner_square(2.5, 0.0, 0.5)]);
         let bug = scene();
         let d = x.dist(goal);
-        let step = |d_reach: f64| bug.blocked_step(x, goal, 1.0, d_reach).expect("a step")[1];
+        let ltg = bug.build_ltg(x, goal);
+        let step = |d_reach: f64| bug.blocked_step(&ltg, x, goal, 1.0, d_reach).expect("a step")[1];
         let near = |a: Point2, b: Point2| a.dist(b) < 1e-6;
         // Within the limit of d_reach: along the boundary.
         assert!(near(step(d - 1.0), Point2::new(2.0, 0.5)), "{:?}", step(d - 1.0));
@@ -2655,7 +2674,10 @@ mod tests {
         // Disabled, along the boundary however far.
         let mut off = scene();
         off.config.wander_limit = 0.0;
-        assert!(near(off.blocked_step(x, goal, 1.0, d - 2.5).expect("a step")[1], Point2::new(2.0, 0.5)));
+        assert!(near(
+            off.blocked_step(&ltg, x, goal, 1.0, d - 2.5).expect("a step")[1],
+            Point2::new(2.0, 0.5)
+        ));
     }
 
     #[test]
