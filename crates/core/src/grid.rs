@@ -113,9 +113,53 @@ impl<T> Grid2<T> {
     }
 }
 
+impl Grid2<bool> {
+    /// Marks in `dst` (same geometry) every cell whose centre lies within `radius` of a set
+    /// cell's centre, with half a cell squared of slack so that a radius of whole cells keeps
+    /// its diagonal neighbours; clears the rest of `dst`.
+    pub fn dilate_into(&self, radius: f64, dst: &mut Grid2<bool>) {
+        let g = self.geometry;
+        let reach = (radius / g.resolution).ceil() as isize;
+        let r2 = (radius / g.resolution).powi(2);
+        let offsets: Vec<(isize, isize)> = (-reach..=reach)
+            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+            .filter(|&(dr, dc)| ((dr * dr + dc * dc) as f64) <= r2 + 0.5)
+            .collect();
+        dst.data.iter_mut().for_each(|v| *v = false);
+        for r in 0..g.rows {
+            for c in 0..g.cols {
+                if !*self.get(c, r) {
+                    continue;
+                }
+                for &(dr, dc) in &offsets {
+                    let (rr, cc) = (r as isize + dr, c as isize + dc);
+                    if rr >= 0 && cc >= 0 && (rr as usize) < g.rows && (cc as usize) < g.cols {
+                        *dst.get_mut(cc as usize, rr as usize) = true;
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dilation_marks_the_cells_within_the_radius_and_only_those() {
+        let g = GridGeometry { cols: 11, rows: 11, resolution: 0.1, origin_x: 0.0, origin_y: 0.0 };
+        let mut src = Grid2::filled(g, false);
+        *src.get_mut(5, 5) = true;
+        let mut dst = Grid2::filled(g, true);
+        src.dilate_into(0.2, &mut dst);
+        for r in 0..11 {
+            for c in 0..11 {
+                let d2 = (c as f64 - 5.0).powi(2) + (r as f64 - 5.0).powi(2);
+                assert_eq!(*dst.get(c, r), d2 <= 4.5, "cell ({c}, {r})");
+            }
+        }
+    }
 
     #[test]
     fn cell_of_and_center_round_trip() {

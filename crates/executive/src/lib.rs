@@ -12,6 +12,7 @@ pub mod command_language;
 pub mod components;
 pub mod deliberative;
 pub mod fault_protection;
+pub mod horizon;
 pub mod messages;
 pub mod mission;
 pub mod operator;

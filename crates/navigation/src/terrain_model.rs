@@ -211,8 +211,8 @@ impl TerrainModel {
     }
 
     fn grow_hazards(&mut self) {
-        dilate(&self.hazard, self.growth, &mut self.grown);
-        dilate(&self.hazard, self.core_growth, &mut self.core);
+        self.hazard.dilate_into(self.growth, &mut self.grown);
+        self.hazard.dilate_into(self.core_growth, &mut self.core);
     }
 
     /// Growth of hazards into configuration space (rover radius plus safety buffer, m).
@@ -459,31 +459,6 @@ pub fn cells_in_disc(g: &GridGeometry, p: Point2, radius: f64) -> Vec<(usize, us
 /// safety buffer) off a hazard.
 fn core_growth(rover: &RoverConfig, safety_buffer: f64) -> f64 {
     0.5 * rover.width + HEADING_ALLOWANCE + safety_buffer.max(0.0)
-}
-
-/// Marks every cell within `radius` of a set cell of `src` in `dst`.
-fn dilate(src: &Grid2<bool>, radius: f64, dst: &mut Grid2<bool>) {
-    let g = src.geometry;
-    let reach = (radius / g.resolution).ceil() as isize;
-    let r2 = (radius / g.resolution).powi(2);
-    let offsets: Vec<(isize, isize)> = (-reach..=reach)
-        .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
-        .filter(|&(dr, dc)| ((dr * dr + dc * dc) as f64) <= r2 + 0.5)
-        .collect();
-    dst.data.iter_mut().for_each(|v| *v = false);
-    for r in 0..g.rows {
-        for c in 0..g.cols {
-            if !*src.get(c, r) {
-                continue;
-            }
-            for &(dr, dc) in &offsets {
-                let (rr, cc) = (r as isize + dr, c as isize + dc);
-                if rr >= 0 && cc >= 0 && (rr as usize) < g.rows && (cc as usize) < g.cols {
-                    *dst.get_mut(cc as usize, rr as usize) = true;
-                }
-            }
-        }
-    }
 }
 
 /// Distance from a point to the nearest of some polygons (0 inside one; infinity without any).

@@ -3,6 +3,7 @@
 mod bench;
 mod campaign;
 mod distributed;
+mod eval_horizon;
 mod eval_localization;
 mod eval_terrain;
 mod interactive;
@@ -53,6 +54,8 @@ enum EvalCommand {
     Terrain(eval_terrain::EvalTerrainArgs),
     /// Localisation: branch-and-bound exactness, match accuracy and closed-loop drift.
     Localization(eval_localization::EvalLocalizationArgs),
+    /// The sensing-horizon reference: the path ratio of an ideal rover that knows only what lies within its sensing range.
+    Horizon(eval_horizon::EvalHorizonArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -163,6 +166,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(cmd)) => bench::run(cmd),
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
+        Some(Command::Eval(EvalCommand::Horizon(args))) => eval_horizon::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),

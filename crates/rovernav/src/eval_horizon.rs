@@ -1,0 +1,273 @@
+//! `rovernav eval horizon`: the sensing-horizon reference on the default Mars yard.
+//!
+//! For each seed, the idealised rover of [`rovernav_executive::horizon`] (true hazards sensed
+//! without noise or occlusion within the range, everything sensed remembered, unsensed ground
+//! free, shortest path replanned) drives from the start to the goal. Its distance over the
+//! optimal length is the path ratio that sensing horizon allows; a navigator's excess over it is
+//! what its sensing (field of view, noise, hazard margins, memory) and its planner cost.
+//! `--against` puts a campaign's runs on the same yards beside it, seed by seed.
+
+use crate::eval_terrain::parse_seed_range;
+use anyhow::Context;
+use rovernav_campaign::Row;
+use rovernav_executive::horizon::{HorizonConfig, horizon_reference};
+use rovernav_executive::world::optimal_length;
+use rovernav_executive::{Mission, build_world};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Options of `rovernav eval horizon`.
+#[derive(clap::Args, Debug)]
+pub struct EvalHorizonArgs {
+    /// Seeds of the default Mars yard, as FIRST..LAST (inclusive).
+    #[arg(long, default_value = "1..20")]
+    pub seeds: String,
+    /// Sensing radius (m).
+    #[arg(long, default_value_t = 5.0)]
+    pub range: f64,
+    /// Field of view about the direction of travel (deg; 360: all around).
+    #[arg(long, default_value_t = 360.0)]
+    pub fov: f64,
+    /// Distance driven between two sensings (m).
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f64,
+    /// Margin the true hazard cells are grown by (m).
+    #[arg(long, default_value_t = 0.0)]
+    pub margin: f64,
+    /// Fraction of the belly clearance at which the truth marks a hazard.
+    #[arg(long, default_value_t = 1.0)]
+    pub clearance_fraction: f64,
+    /// A campaign folder (`rovernav campaign --out DIR`) run on these yards: its navigators'
+    /// path ratios beside the reference's, seed by seed.
+    #[arg(long)]
+    pub against: Option<PathBuf>,
+    /// Print the figures as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One seed's reference run.
+struct SeedRow {
+    seed: u64,
+    optimal_m: Option<f64>,
+    driven_m: f64,
+    reached: bool,
+    plans: usize,
+}
+
+impl SeedRow {
+    /// Distance driven over the optimal length, when reached.
+    fn ratio(&self) -> Option<f64> {
+        self.optimal_m.filter(|_| self.reached).map(|o| self.driven_m / o)
+    }
+}
+
+/// Mean and median of some values (NaN when empty).
+fn mean_median(values: &[f64]) -> (f64, f64) {
+    if values.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
+    (v.iter().sum::<f64>() / n as f64, median)
+}
+
+/// Runs the reference on every seed (in parallel) and returns the rows in seed order.
+fn reference_rows(seeds: &[u64], config: &HorizonConfig) -> anyhow::Result<Vec<SeedRow>> {
+    let one = |seed: u64| -> anyhow::Result<SeedRow> {
+        let mut mission = Mission::default_mission();
+        mission.seed = seed;
+        let world = build_world(&mission, "built-in default mission")?;
+        let run = horizon_reference(&world, config)?;
+        Ok(SeedRow {
+            seed,
+            optimal_m: optimal_length(&world),
+            driven_m: run.driven_m,
+            reached: run.reached,
+            plans: run.plans,
+        })
+    };
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(seeds.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut rows: Vec<Option<anyhow::Result<SeedRow>>> = seeds.iter().map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(&seed) = seeds.get(i) else { break done };
+                        done.push((i, one(seed)));
+                    }
+                })
+            })
+            .collect();
+        for w in workers {
+            for (i, r) in w.join().expect("a reference worker") {
+                rows[i] = Some(r);
+            }
+        }
+    });
+    rows.into_iter().map(|r| r.expect("every seed run")).collect()
+}
+
+/// The campaign's runs on these yards, by navigator and seed, checked to be the same terrains.
+fn campaign_runs(dir: &Path, rows: &[SeedRow]) -> anyhow::Result<BTreeMap<String, BTreeMap<u64, Row>>> {
+    let (_, runs) =
+        rovernav_campaign::read_dir(dir).with_context(|| format!("--against {}", dir.display()))?;
+    let mut by_nav: BTreeMap<String, BTreeMap<u64, Row>> = BTreeMap::new();
+    for run in runs {
+        let Some(reference) = rows.iter().find(|r| r.seed == run.seed) else { continue };
+        if run.terrain != "yard" {
+            continue;
+        }
+        // The same seed of a differently generated yard would compare unlike terrains: the
+        // optimal lengths tell.
+        if let (Some(a), Some(b)) = (run.optimal_length_m, reference.optimal_m)
+            && (a - b).abs() > 1e-6 * b.max(1.0)
+        {
+            anyhow::bail!(
+                "--against {}: trial {} (seed {}) has optimal length {a:.3} m, the default yard of that seed {b:.3} m: not the default mission's yards",
+                dir.display(),
+                run.trial,
+                run.seed
+            );
+        }
+        by_nav.entry(run.navigator.clone()).or_default().insert(run.seed, run);
+    }
+    anyhow::ensure!(!by_nav.is_empty(), "--against {}: no yard runs on seeds of this range", dir.display());
+    Ok(by_nav)
+}
+
+/// Runs the evaluation and prints the figures.
+pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
+    let range = parse_seed_range(&args.seeds)?;
+    let seeds: Vec<u64> = range.clone().collect();
+    let config = HorizonConfig {
+        range_m: args.range,
+        fov_deg: args.fov,
+        step_m: args.step,
+        margin_m: args.margin,
+        clearance_fraction: args.clearance_fraction,
+        ..Default::default()
+    };
+    // Settings are checked before any terrain is built.
+    horizon_config_check(&config)?;
+    let rows = reference_rows(&seeds, &config)?;
+    let navs = args.against.as_ref().map(|d| campaign_runs(d, &rows)).transpose()?.unwrap_or_default();
+
+    let ratios: Vec<f64> = rows.iter().filter_map(SeedRow::ratio).collect();
+    let (mean, median) = mean_median(&ratios);
+    let reached = rows.iter().filter(|r| r.reached).count();
+    // Per navigator: its mean ratio and the reference's over the seeds both reached.
+    let paired: Vec<(String, usize, f64, f64)> = navs
+        .iter()
+        .map(|(nav, runs)| {
+            let pairs: Vec<(f64, f64)> =
+                rows.iter().filter_map(|r| Some((runs.get(&r.seed)?.path_ratio?, r.ratio()?))).collect();
+            let n = pairs.len();
+            let m = |f: fn(&(f64, f64)) -> f64| pairs.iter().map(f).sum::<f64>() / n.max(1) as f64;
+            (nav.clone(), n, m(|p| p.0), m(|p| p.1))
+        })
+        .collect();
+    if args.json {
+        let per_seed: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                let mut v = serde_json::json!({
+                    "seed": r.seed,
+                    "reached": r.reached,
+                    "driven_m": r.driven_m,
+                    "optimal_length_m": r.optimal_m,
+                    "path_ratio": r.ratio(),
+                    "plans": r.plans,
+                });
+                if !navs.is_empty() {
+                    v["navigators"] = navs
+                        .iter()
+                        .filter_map(|(nav, runs)| {
+                            let run = runs.get(&r.seed)?;
+                            Some((
+                                nav.clone(),
+                                serde_json::json!({"outcome": run.outcome, "hazard_contacts": run.hazard_contacts, "path_ratio": run.path_ratio}),
+                            ))
+                        })
+                        .collect::<serde_json::Map<_, _>>()
+                        .into();
+                }
+                v
+            })
+            .collect();
+        let against: Vec<_> = paired
+            .iter()
+            .map(|(nav, n, nav_mean, ref_mean)| {
+                serde_json::json!({"navigator": nav, "seeds_both_reached": n, "path_ratio_mean": nav_mean, "reference_path_ratio_mean": ref_mean})
+            })
+            .collect();
+        let v = serde_json::json!({
+            "seeds": format!("{}..{}", range.start(), range.end()),
+            "range_m": args.range,
+            "fov_deg": args.fov,
+            "step_m": args.step,
+            "margin_m": args.margin,
+            "clearance_fraction": args.clearance_fraction,
+            "reached": reached,
+            "runs": rows.len(),
+            "path_ratio_mean": mean,
+            "path_ratio_median": median,
+            "runs_per_seed": per_seed,
+            "against": against,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    let nav_head: String = navs.keys().map(|n| format!("  {n:>12}")).collect();
+    println!("seed  reached  driven (m)  optimal (m)  ratio  plans{nav_head}");
+    for r in &rows {
+        let nav_cols: String = navs
+            .values()
+            .map(|runs| {
+                let cell = runs.get(&r.seed).map_or("-".to_string(), |run| match run.path_ratio {
+                    Some(x) if run.hazard_contacts == 0 => format!("{x:.3}"),
+                    Some(x) => format!("{x:.3} c{}", run.hazard_contacts),
+                    None => run.outcome.clone(),
+                });
+                format!("  {cell:>12}")
+            })
+            .collect();
+        println!(
+            "{:>4}  {:>7}  {:>10.2}  {:>11}  {:>5}  {:>5}{nav_cols}",
+            r.seed,
+            if r.reached { "yes" } else { "no" },
+            r.driven_m,
+            r.optimal_m.map_or("-".into(), |o| format!("{o:.2}")),
+            r.ratio().map_or("-".into(), |x| format!("{x:.3}")),
+            r.plans
+        );
+    }
+    println!(
+        "seeds {}..{}: sensing-horizon reference ({} m, {} deg, every {} m, margin {} m, clearance x {}): {reached}/{} reached, path ratio mean {mean:.3} (median {median:.3})",
+        range.start(),
+        range.end(),
+        args.range,
+        args.fov,
+        args.step,
+        args.margin,
+        args.clearance_fraction,
+        rows.len()
+    );
+    for (nav, n, nav_mean, ref_mean) in &paired {
+        println!(
+            "{nav}: path ratio mean {nav_mean:.3} against the reference's {ref_mean:.3} over the {n} seeds both reached"
+        );
+    }
+    Ok(())
+}
+
+/// Rejects out-of-range settings before any work.
+fn horizon_config_check(config: &HorizonConfig) -> anyhow::Result<()> {
+    config.validate().map_err(|e| anyhow::anyhow!("{e}"))
+}
