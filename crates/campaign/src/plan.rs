@@ -104,6 +104,7 @@ impl Plan {
             mission.name = format!("{}-trial-{k:04}", spec.name);
             mission.seed = seed;
             mission.localizer = spec.localizer.clone();
+            mission.sensors = spec.sensors.clone();
             mission.time_limit_s = spec.time_limit_s;
             mission.max_cycles = spec.max_cycles;
             mission.terrain = TerrainSpec::Procedural {
@@ -161,6 +162,7 @@ impl Plan {
                 let mut mission = template.clone();
                 mission.seed = u64::from(rng.next_u32());
                 mission.localizer = spec.localizer.clone();
+                mission.sensors = template.sensors.overridden_by(&spec.sensors);
                 trials.push(TrialInfo {
                     trial: k,
                     terrain_kind: TerrainKind::Dem,
@@ -232,7 +234,8 @@ impl Plan {
              [terrain]\nkind = \"procedural\"\nsize_m = {size_m:?}\nresolution_m = {resolution_m:?}\n\
              rock_abundance = {rock_abundance:?}\nrelief_m = {relief_m:?}\nslope_deg = {slope_deg:?}\n{craters}\n\
              [start]\nx = {sx:?}\ny = {sy:?}\nyaw_deg = {yaw:?}\n\n\
-             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n{params}",
+             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n{sensors}{params}",
+            sensors = m.sensors.toml_table(),
             campaign = self.spec.name,
             cseed = self.spec.seed,
             name = m.name,
@@ -384,6 +387,20 @@ mod tests {
 
     fn spec(text: &str) -> CampaignSpec {
         CampaignSpec::from_toml(text, "c.toml").unwrap()
+    }
+
+    #[test]
+    fn sensor_overrides_reach_every_run_and_its_trial_file() {
+        let p = Plan::new(spec("trials = 2\n[sensors]\nstereo_noise_scale = 0.5")).unwrap();
+        for job in p.jobs() {
+            assert_eq!(p.mission(&job).0.sensors.stereo_noise_scale, Some(0.5));
+        }
+        let file = p.mission_toml(1).expect("a procedural trial");
+        let rerun = Mission::from_toml(&file, "trial.toml").unwrap();
+        assert_eq!(rerun.sensors, p.mission(&p.jobs()[p.navigators.len()]).0.sensors);
+        let err =
+            CampaignSpec::from_toml("[sensors]\nstereo_dropout = 2.0", "c.toml").unwrap_err().to_string();
+        assert!(err.contains("sensors.stereo_dropout"), "{err}");
     }
 
     #[test]

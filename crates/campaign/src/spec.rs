@@ -42,6 +42,10 @@ pub struct CampaignSpec {
     /// `[navigator_params]`); a navigator without an entry keeps its defaults.
     #[serde(default)]
     pub navigator_params: std::collections::BTreeMap<String, rovernav_navigation::NavigatorParams>,
+    /// Sensor overrides of every run (`[sensors]`, as a mission's; on a DEM mission they take
+    /// the place of the file's own where given).
+    #[serde(default, skip_serializing_if = "rovernav_executive::mission::SensorSpec::is_empty")]
+    pub sensors: rovernav_executive::mission::SensorSpec,
     /// Localiser registry name used by every run.
     #[serde(default = "default_localizer")]
     pub localizer: String,
@@ -308,6 +312,9 @@ impl CampaignSpec {
                 };
                 return bad(&field, e.to_string());
             }
+        }
+        if let Err((field, why)) = self.sensors.check() {
+            return bad(&format!("sensors.{field}"), why.into());
         }
         let localizers = rovernav_localization::LOCALIZER_NAMES;
         if !localizers.contains(&self.localizer.as_str()) {

@@ -155,13 +155,62 @@ pub struct RoverSpec {
 }
 
 /// Optional overrides of the sensor noise (defaults: the simulator's `SensorModel::default`).
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SensorSpec {
     /// Compass noise sigma (deg).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub compass_sigma_deg: Option<f64>,
     /// Probability that a stereo pixel gives no range.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub stereo_dropout: Option<f64>,
+    /// Multiplier on the stereo pairs' range noise (mast, full-resolution mast and body
+    /// pairs): 0 is noise-free stereo, 2 twice the default sigma.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stereo_noise_scale: Option<f64>,
+}
+
+impl SensorSpec {
+    /// Whether no override is given.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// These overrides with `over`'s set fields taking their place.
+    pub fn overridden_by(&self, over: &SensorSpec) -> SensorSpec {
+        SensorSpec {
+            compass_sigma_deg: over.compass_sigma_deg.or(self.compass_sigma_deg),
+            stereo_dropout: over.stereo_dropout.or(self.stereo_dropout),
+            stereo_noise_scale: over.stereo_noise_scale.or(self.stereo_noise_scale),
+        }
+    }
+
+    /// The overrides as the lines of a mission file's `[sensors]` table (empty without any).
+    pub fn toml_table(&self) -> String {
+        let lines: String = [
+            ("compass_sigma_deg", self.compass_sigma_deg),
+            ("stereo_dropout", self.stereo_dropout),
+            ("stereo_noise_scale", self.stereo_noise_scale),
+        ]
+        .iter()
+        .filter_map(|(k, v)| v.map(|v| format!("{k} = {v:?}\n")))
+        .collect();
+        if lines.is_empty() { lines } else { format!("\n[sensors]\n{lines}") }
+    }
+
+    /// The first override out of range, as (field under `sensors.`, why).
+    pub fn check(&self) -> Result<(), (&'static str, &'static str)> {
+        if self.compass_sigma_deg.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+            return Err(("compass_sigma_deg", "must be a number of degrees >= 0"));
+        }
+        if self.stereo_dropout.is_some_and(|v| !(0.0..1.0).contains(&v)) {
+            return Err(("stereo_dropout", "must be a probability in [0, 1)"));
+        }
+        if self.stereo_noise_scale.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+            return Err(("stereo_noise_scale", "must be a finite number >= 0"));
+        }
+        Ok(())
+    }
 }
 
 /// A pose in either local or projected coordinates.
@@ -438,6 +487,9 @@ impl Mission {
         if !self.start.yaw_deg.is_finite() {
             return bad("start.yaw_deg", "must be a finite number");
         }
+        if let Err((field, why)) = self.sensors.check() {
+            return bad(&format!("sensors.{field}"), why);
+        }
         if !positive(self.goal.tolerance_m) {
             return bad("goal.tolerance_m", "must be positive");
         }
@@ -588,6 +640,28 @@ mod tests {
         let text = DEFAULT_MISSION_TOML.replace("navigator =", "navigatr =");
         let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
         assert!(err.contains("m.toml") && err.contains("navigatr") && err.contains("line "), "{err}");
+    }
+
+    #[test]
+    fn sensor_overrides_out_of_range_name_their_field() {
+        for (line, field) in [
+            ("stereo_dropout = 1.5", "sensors.stereo_dropout"),
+            ("stereo_noise_scale = -1.0", "sensors.stereo_noise_scale"),
+            ("compass_sigma_deg = nan", "sensors.compass_sigma_deg"),
+        ] {
+            let text = format!("{DEFAULT_MISSION_TOML}\n[sensors]\n{line}\n");
+            let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
+            assert!(err.contains("m.toml") && err.contains(field), "{line}: {err}");
+        }
+        let text =
+            format!("{DEFAULT_MISSION_TOML}\n[sensors]\nstereo_noise_scale = 0.0\nstereo_dropout = 0.1\n");
+        let m = Mission::from_toml(&text, "m.toml").unwrap();
+        // The mission file table written back parses to the same overrides.
+        let again =
+            Mission::from_toml(&format!("{DEFAULT_MISSION_TOML}{}", m.sensors.toml_table()), "m.toml")
+                .unwrap();
+        assert_eq!(again.sensors, m.sensors);
+        assert_eq!(m.sensors.stereo_noise_scale, Some(0.0));
     }
 
     #[test]

@@ -88,6 +88,12 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
         sensor_model.mast_fine.dropout = p;
         sensor_model.body.dropout = p;
     }
+    if let Some(k) = mission.sensors.stereo_noise_scale {
+        for imager in [&mut sensor_model.mast, &mut sensor_model.mast_fine, &mut sensor_model.body] {
+            imager.sigma_constant *= k;
+            imager.sigma_quadratic *= k;
+        }
+    }
     let invalid = |field: &str, message: String| WorldError::Invalid {
         origin: origin.into(),
         field: field.into(),
@@ -291,4 +297,33 @@ pub fn optimal_length(world: &World) -> Option<f64> {
         length += to_world(*first).dist(world.start.position()) + to_world(*last).dist(world.goal.position);
     }
     Some(length)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rovernav_core::{NavCommand, SenseRequest};
+
+    /// The mast points of one image from the start, with the sensors' noise drawn from `seed`.
+    fn mast_points(mission: &Mission, seed: u64) -> Vec<[f32; 3]> {
+        let world = build_world(mission, "test").unwrap();
+        let mut sim =
+            rovernav_sim::Simulator::new(world.terrain, world.rover, world.sensor_model, world.start, seed);
+        let _ = sim.initial_frame();
+        let frame = sim.execute(&NavCommand::Sense(vec![SenseRequest::Mast { pan: 0.0 }]));
+        frame.clouds.into_iter().flat_map(|c| c.points).collect()
+    }
+
+    #[test]
+    fn noise_free_stereo_gives_the_same_points_whatever_the_noise_seed() {
+        let mut mission = Mission::default_mission();
+        mission.sensors.stereo_dropout = Some(0.0);
+        let noisy = (mast_points(&mission, 1), mast_points(&mission, 2));
+        assert!(!noisy.0.is_empty());
+        assert_ne!(noisy.0, noisy.1, "the default stereo noise differs between noise seeds");
+        mission.sensors.stereo_noise_scale = Some(0.0);
+        let clean = (mast_points(&mission, 1), mast_points(&mission, 2));
+        assert!(!clean.0.is_empty());
+        assert_eq!(clean.0, clean.1);
+    }
 }
