@@ -1,4 +1,5 @@
-//! `rovernav eval horizon`: the sensing-horizon reference on the default Mars yard.
+//! `rovernav eval horizon`: the sensing-horizon reference on the default Mars yard (or on a
+//! mission file's terrain).
 //!
 //! For each seed, the idealised rover of [`rovernav_executive::horizon`] (true hazards sensed
 //! without noise or occlusion within the range, everything sensed remembered, unsensed ground
@@ -9,7 +10,7 @@
 
 use crate::eval_terrain::parse_seed_range;
 use anyhow::Context;
-use rovernav_campaign::Row;
+use rovernav_campaign::{Row, TerrainKind};
 use rovernav_executive::horizon::{HorizonConfig, horizon_reference};
 use rovernav_executive::world::optimal_length;
 use rovernav_executive::{Mission, build_world};
@@ -19,9 +20,13 @@ use std::path::{Path, PathBuf};
 /// Options of `rovernav eval horizon`.
 #[derive(clap::Args, Debug)]
 pub struct EvalHorizonArgs {
-    /// Seeds of the default Mars yard, as FIRST..LAST (inclusive).
+    /// Seeds of the mission (the terrain of a procedural one, the rocks of a DEM one), as
+    /// FIRST..LAST (inclusive).
     #[arg(long, default_value = "1..20")]
     pub seeds: String,
+    /// A mission file instead of the built-in default mission.
+    #[arg(long)]
+    pub mission: Option<PathBuf>,
     /// Sensing radius (m).
     #[arg(long, default_value_t = 5.0)]
     pub range: f64,
@@ -75,11 +80,16 @@ fn mean_median(values: &[f64]) -> (f64, f64) {
 }
 
 /// Runs the reference on every seed (in parallel) and returns the rows in seed order.
-fn reference_rows(seeds: &[u64], config: &HorizonConfig) -> anyhow::Result<Vec<SeedRow>> {
+fn reference_rows(
+    template: &Mission,
+    origin: &str,
+    seeds: &[u64],
+    config: &HorizonConfig,
+) -> anyhow::Result<Vec<SeedRow>> {
     let one = |seed: u64| -> anyhow::Result<SeedRow> {
-        let mut mission = Mission::default_mission();
+        let mut mission = template.clone();
         mission.seed = seed;
-        let world = build_world(&mission, "built-in default mission")?;
+        let world = build_world(&mission, origin)?;
         let run = horizon_reference(&world, config)?;
         Ok(SeedRow {
             seed,
@@ -114,14 +124,24 @@ fn reference_rows(seeds: &[u64], config: &HorizonConfig) -> anyhow::Result<Vec<S
     rows.into_iter().map(|r| r.expect("every seed run")).collect()
 }
 
-/// The campaign's runs on these yards, by navigator and seed, checked to be the same terrains.
-fn campaign_runs(dir: &Path, rows: &[SeedRow]) -> anyhow::Result<BTreeMap<String, BTreeMap<u64, Row>>> {
+/// The campaign's runs on these terrains (its yards for a procedural mission, its trials of
+/// the mission for a DEM one), by navigator and seed, checked to be the same terrains.
+fn campaign_runs(
+    dir: &Path,
+    mission: &Mission,
+    rows: &[SeedRow],
+) -> anyhow::Result<BTreeMap<String, BTreeMap<u64, Row>>> {
+    let procedural = matches!(mission.terrain, rovernav_executive::mission::TerrainSpec::Procedural { .. });
     let (_, runs) =
         rovernav_campaign::read_dir(dir).with_context(|| format!("--against {}", dir.display()))?;
     let mut by_nav: BTreeMap<String, BTreeMap<u64, Row>> = BTreeMap::new();
     for run in runs {
         let Some(reference) = rows.iter().find(|r| r.seed == run.seed) else { continue };
-        if run.terrain != "yard" {
+        let same_kind = match run.terrain_kind {
+            TerrainKind::Procedural => procedural,
+            TerrainKind::Dem => !procedural && run.terrain == mission.name,
+        };
+        if !same_kind {
             continue;
         }
         // The same seed of a differently generated yard would compare unlike terrains: the
@@ -130,7 +150,7 @@ fn campaign_runs(dir: &Path, rows: &[SeedRow]) -> anyhow::Result<BTreeMap<String
             && (a - b).abs() > 1e-6 * b.max(1.0)
         {
             anyhow::bail!(
-                "--against {}: trial {} (seed {}) has optimal length {a:.3} m, the default yard of that seed {b:.3} m: not the default mission's yards",
+                "--against {}: trial {} (seed {}) has optimal length {a:.3} m, the mission's terrain of that seed {b:.3} m: not this mission's terrains",
                 dir.display(),
                 run.trial,
                 run.seed
@@ -138,7 +158,11 @@ fn campaign_runs(dir: &Path, rows: &[SeedRow]) -> anyhow::Result<BTreeMap<String
         }
         by_nav.entry(run.navigator.clone()).or_default().insert(run.seed, run);
     }
-    anyhow::ensure!(!by_nav.is_empty(), "--against {}: no yard runs on seeds of this range", dir.display());
+    anyhow::ensure!(
+        !by_nav.is_empty(),
+        "--against {}: no runs of this mission's terrains on seeds of this range",
+        dir.display()
+    );
     Ok(by_nav)
 }
 
@@ -156,8 +180,13 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
     };
     // Settings are checked before any terrain is built.
     horizon_config_check(&config)?;
-    let rows = reference_rows(&seeds, &config)?;
-    let navs = args.against.as_ref().map(|d| campaign_runs(d, &rows)).transpose()?.unwrap_or_default();
+    let (mission, origin) = match &args.mission {
+        Some(path) => (Mission::from_file(path)?, path.display().to_string()),
+        None => (Mission::default_mission(), "built-in default mission".to_string()),
+    };
+    let rows = reference_rows(&mission, &origin, &seeds, &config)?;
+    let navs =
+        args.against.as_ref().map(|d| campaign_runs(d, &mission, &rows)).transpose()?.unwrap_or_default();
 
     let ratios: Vec<f64> = rows.iter().filter_map(SeedRow::ratio).collect();
     let (mean, median) = mean_median(&ratios);
@@ -208,6 +237,7 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
             })
             .collect();
         let v = serde_json::json!({
+            "mission": mission.name,
             "seeds": format!("{}..{}", range.start(), range.end()),
             "range_m": args.range,
             "fov_deg": args.fov,
@@ -249,7 +279,8 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
         );
     }
     println!(
-        "seeds {}..{}: sensing-horizon reference ({} m, {} deg, every {} m, margin {} m, clearance x {}): {reached}/{} reached, path ratio mean {mean:.3} (median {median:.3})",
+        "{}, seeds {}..{}: sensing-horizon reference ({} m, {} deg, every {} m, margin {} m, clearance x {}): {reached}/{} reached, path ratio mean {mean:.3} (median {median:.3})",
+        mission.name,
         range.start(),
         range.end(),
         args.range,

@@ -48,6 +48,24 @@ fn the_reference_drives_no_shorter_than_the_optimal_path_allows_and_close_to_it(
 }
 
 #[test]
+fn a_mission_file_gives_its_own_terrain() {
+    let mission = concat!(env!("CARGO_MANIFEST_DIR"), "/../../missions/roverbug-marsyard.toml");
+    let (ok, out, err) = rovernav(&["eval", "horizon", "--mission", mission, "--seeds", "1", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("JSON figures");
+    assert_eq!(v["mission"], "roverbug-marsyard");
+    let run = &v["runs_per_seed"][0];
+    assert_eq!(run["reached"], true, "{run}");
+    // The mission's own terrain: its optimal length, not the default yard's of seed 1.
+    let (ok, default, _) = rovernav(&["eval", "horizon", "--seeds", "1", "--json"]);
+    assert!(ok);
+    let default: serde_json::Value = serde_json::from_str(&default).unwrap();
+    assert_ne!(run["optimal_length_m"], default["runs_per_seed"][0]["optimal_length_m"]);
+    let (ok, _, err) = rovernav(&["eval", "horizon", "--mission", "no-such-mission.toml"]);
+    assert!(!ok && err.contains("no-such-mission.toml") && !err.contains("panicked"), "{err}");
+}
+
+#[test]
 fn a_campaign_of_other_yards_is_refused_and_bad_settings_are_named() {
     let (ok, _, err) = rovernav(&["eval", "horizon", "--fov", "400"]);
     assert!(!ok && err.contains("field of view 400"), "{err}");
@@ -80,24 +98,21 @@ fn against_a_campaign_the_navigator_ratio_stands_beside_the_reference() {
     assert_eq!(bug["path_ratio"], row["path_ratio"]);
     // The campaign's optimal length is the reference's own: the same yard.
     assert!((num(&row, "optimal_length_m") - num(seed, "optimal_length_m")).abs() < 1e-6);
-    // The seeds 1..2 of another campaign's smaller yards are not the default yards.
-    let quick = dir.join("quick");
-    let quick_spec = concat!(env!("CARGO_MANIFEST_DIR"), "/../../campaigns/quick.toml");
-    let (ok, _, err) = rovernav(&[
-        "campaign",
-        quick_spec,
-        "--trials",
-        "2",
-        "--navigators",
-        "astar-grid",
-        "--out",
-        quick.to_str().unwrap(),
-    ]);
+    // Seed 1 of a campaign's smaller yard is not the default yard of seed 1.
+    let other = dir.join("other.toml");
+    std::fs::write(
+        &other,
+        "name = \"other\"\nfirst_terrain_seed = 1\ntrials = 1\nnavigators = [\"astar-grid\"]\n[yard]\nsize_m = 12.0\n",
+    )
+    .unwrap();
+    let other_out = dir.join("other");
+    let (ok, _, err) = rovernav(&["campaign", other.to_str().unwrap(), "--out", other_out.to_str().unwrap()]);
     assert!(ok, "{err}");
     let (ok, _, err) =
-        rovernav(&["eval", "horizon", "--seeds", "1..6", "--against", quick.to_str().unwrap()]);
-    assert!(
-        !ok && (err.contains("not the default mission's yards") || err.contains("no yard runs")),
-        "{err}"
-    );
+        rovernav(&["eval", "horizon", "--seeds", "1", "--against", other_out.to_str().unwrap()]);
+    assert!(!ok && err.contains("not this mission's terrains"), "{err}");
+    // A seed range the campaign has no run on is refused too.
+    let (ok, _, err) =
+        rovernav(&["eval", "horizon", "--seeds", "2", "--against", other_out.to_str().unwrap()]);
+    assert!(!ok && err.contains("no runs of this mission's terrains"), "{err}");
 }
