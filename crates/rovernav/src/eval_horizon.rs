@@ -179,7 +179,7 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     // Settings are checked before any terrain is built.
-    horizon_config_check(&config)?;
+    config.validate()?;
     let (mission, origin) = match &args.mission {
         Some(path) => (Mission::from_file(path)?, path.display().to_string()),
         None => (Mission::default_mission(), "built-in default mission".to_string()),
@@ -296,9 +296,4 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// Rejects out-of-range settings before any work.
-fn horizon_config_check(config: &HorizonConfig) -> anyhow::Result<()> {
-    config.validate().map_err(|e| anyhow::anyhow!("{e}"))
 }
