@@ -223,6 +223,11 @@ pub struct RoverBugConfig {
     /// TangentBug way on (path length plus distance to the goal) rather than the wall
     /// follower's (0 disables: always the wall follower's; README.md, session 20).
     pub wander_limit: f64,
+    /// Mast wedges at the cameras' full resolution (1) instead of the subsampled navigation
+    /// image (0, the default): sixteen times the rays at the same range noise per ray, so a
+    /// cell mean at 4-5 m averages many points instead of one or two noisy ones, at twice the
+    /// capture time (README.md, session 21).
+    pub fine_mast: bool,
 }
 
 impl Default for RoverBugConfig {
@@ -254,6 +259,7 @@ impl Default for RoverBugConfig {
             growth_radius: 0.0,
             near_side_reach: true,
             wander_limit: 2.0,
+            fine_mast: false,
         }
     }
 }
@@ -413,6 +419,12 @@ impl RoverBugConfig {
                 doc: "how much farther from the goal than d_reach boundary following may lead before its blocked step is the way on toward the goal rather than along the boundary (0 disables)",
                 unit: Metres,
                 field: |c| Field::Real(&mut c.wander_limit),
+            },
+            Param {
+                name: "fine_mast",
+                doc: "1: mast wedges at the cameras' full resolution (16x the rays, twice the capture time); 0: the subsampled navigation image",
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.fine_mast),
             },
         ]
     }
@@ -625,9 +637,11 @@ impl RoverBug {
         NavCommand::Sense(requests)
     }
 
-    /// The mast pan (body frame) that centres a wedge on the world bearing `bearing`.
-    fn mast_at(pose: Pose2, bearing: f64) -> SenseRequest {
-        SenseRequest::Mast { pan: angle_diff(bearing, pose.yaw) }
+    /// The mast wedge (navigation or full-resolution image, per `fine_mast`) centred on the
+    /// world bearing `bearing`.
+    fn mast_at(&self, pose: Pose2, bearing: f64) -> SenseRequest {
+        let pan = angle_diff(bearing, pose.yaw);
+        if self.config.fine_mast { SenseRequest::MastFine { pan } } else { SenseRequest::Mast { pan } }
     }
 
     /// Whether a world point lies in the region sensed from the current position.
@@ -1366,7 +1380,7 @@ impl RoverBug {
         let mut scans = scans;
         scans.push(next);
         self.mode = Mode::Virtual { sense, scans };
-        Some(self.sense(vec![Self::mast_at(pose, goal.sub(x).angle() + angle)]))
+        Some(self.sense(vec![self.mast_at(pose, goal.sub(x).angle() + angle)]))
     }
 
     /// Safety-layer hazard cells (centres) that come within the body margin of the body
@@ -1879,7 +1893,7 @@ impl RoverBug {
         let mut scans = scans;
         scans.push(next);
         self.mode = Mode::Normal { sense, d_reach, v_loop, left_loop, scans };
-        Some(self.sense(vec![Self::mast_at(pose, goal.sub(x).angle() + angle)]))
+        Some(self.sense(vec![self.mast_at(pose, goal.sub(x).angle() + angle)]))
     }
 
     /// The sensing that opens a step in the current mode.
@@ -1895,10 +1909,10 @@ impl RoverBug {
             return self.finish_now(Outcome::HelpRequested, &why);
         }
         let toward_goal = goal.sub(pose.position()).angle();
-        let mut requests = vec![Self::mast_at(pose, toward_goal)];
+        let mut requests = vec![self.mast_at(pose, toward_goal)];
         if let Mode::Normal { sense, .. } = self.mode {
             // Also along the boundary, a quarter turn from the goal direction.
-            requests.push(Self::mast_at(pose, pose.yaw + sense * self.alpha_mast()));
+            requests.push(self.mast_at(pose, pose.yaw + sense * self.alpha_mast()));
         }
         if let Some(target) = self.look_at.take()
             && target.dist(pose.position()) > self.config.near_visible
@@ -1907,7 +1921,7 @@ impl RoverBug {
             // zone, unless the wedge toward the goal covers it.
             let bearing = target.sub(pose.position()).angle();
             if angle_diff(bearing, toward_goal).abs() > 0.5 * self.alpha_mast() {
-                requests.push(Self::mast_at(pose, bearing));
+                requests.push(self.mast_at(pose, bearing));
             }
         }
         requests.push(SenseRequest::BodyFront);
