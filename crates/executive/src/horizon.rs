@@ -14,12 +14,9 @@
 //! This is an evaluation tool, like the optimal length: it reads simulation truth on purpose and
 //! is never part of the autonomy.
 
-use crate::world::World;
+use crate::world::{OPTIMAL_PATH_RESOLUTION as RESOLUTION, World, optimal_length_on, true_hazard};
 use rovernav_core::{Grid2, GridGeometry, Point2};
 use rovernav_planning::{Cell, CellChange, CostGrid, FieldDStar, GlobalPlanner};
-
-/// Cell size of the reference's hazard map (m): the optimal path's.
-const RESOLUTION: f64 = 0.1;
 
 /// The reference rover's sensing and driving.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,6 +90,9 @@ pub struct HorizonRun {
     pub driven_m: f64,
     /// Plans made (the first one and every replan a newly sensed hazard forced).
     pub plans: usize,
+    /// The optimal length with full knowledge of the unmodified truth (m), if a path exists:
+    /// [`crate::world::optimal_length`], planned on the same hazard grid.
+    pub optimal_m: Option<f64>,
     /// The path driven, start first (m, terrain frame).
     pub track: Vec<Point2>,
 }
@@ -111,17 +111,22 @@ pub enum HorizonError {
 /// Drives the sensing-horizon reference from the world's start toward its goal.
 pub fn horizon_reference(world: &World, config: &HorizonConfig) -> Result<HorizonRun, HorizonError> {
     config.validate()?;
-    let rover = rovernav_core::RoverConfig {
-        clearance: world.rover.clearance * config.clearance_fraction,
-        ..world.rover.clone()
+    let exact = true_hazard(world);
+    let optimal_m = optimal_length_on(world, &exact);
+    let truth = if config.clearance_fraction == 1.0 {
+        grow(&exact, config.margin_m)
+    } else {
+        let rover = rovernav_core::RoverConfig {
+            clearance: world.rover.clearance * config.clearance_fraction,
+            ..world.rover.clone()
+        };
+        grow(&rovernav_sim::true_hazard_grid(&world.terrain, &rover, RESOLUTION), config.margin_m)
     };
-    let truth = grow(&rovernav_sim::true_hazard_grid(&world.terrain, &rover, RESOLUTION), config.margin_m);
     let g = truth.geometry;
     let (start, goal) = (world.start.position(), world.goal.position);
     let start_cell = corner_cell(&g, start).ok_or(HorizonError::OffTerrain("start"))?;
     let goal_cell = corner_cell(&g, goal).ok_or(HorizonError::OffTerrain("goal"))?;
     let mut known = Grid2::filled(g, false);
-    let mut blocked = Grid2::filled(g, false);
     let mut grid = CostGrid::uniform(g.rows, g.cols, 1.0).expect("a non-empty grid");
     grid.set_geometry(g);
     let mut planner = FieldDStar::new();
@@ -137,11 +142,16 @@ pub fn horizon_reference(world: &World, config: &HorizonConfig) -> Result<Horizo
     // The start and goal pads are safe by construction, as for the optimal length.
     let pads = [start_cell, goal_cell];
     while !reached && driven < config.max_distance_m {
-        let changes = sense(&truth, &mut known, &mut blocked, x, heading, config, &pads);
-        let cut = changes.iter().any(|c| path_crosses(&g, &path, c.cell));
+        let changes = sense(&truth, &mut known, x, heading, config, &pads);
         if !changes.is_empty() {
             planner.update_cells(&changes).expect("cells inside the grid");
         }
+        // The planner's grid holds every hazard sensed so far: the path is cut when it now
+        // costs infinity on Field D*'s own segment model.
+        let grid = planner.grid().expect("the grid set above");
+        let in_grid = |p: Point2| grid.world_to_grid(p);
+        let cut = !changes.is_empty()
+            && !grid.polyline_cost(&path.iter().map(|&p| in_grid(p)).collect::<Vec<_>>()).is_finite();
         if path.len() < 2 || cut {
             let from = corner_cell(&g, x).ok_or(HorizonError::OffTerrain("rover"))?;
             let plan = if plans == 0 {
@@ -158,8 +168,10 @@ pub fn horizon_reference(world: &World, config: &HorizonConfig) -> Result<Horizo
             // The plan starts at the lattice corner nearest the rover: join the rover straight
             // to a later point of the plan when nothing known blocks the way, so that snapping
             // to the lattice adds no length.
-            let skip =
-                (1..points.len().min(4)).rev().find(|&i| segment_free(&blocked, x, points[i])).unwrap_or(0);
+            let grid = planner.grid().expect("the grid set above");
+            let free =
+                |p: Point2| grid.segment_cost(grid.world_to_grid(x), grid.world_to_grid(p)).is_finite();
+            let skip = (1..points.len().min(4)).rev().find(|&i| free(points[i])).unwrap_or(0);
             path = std::iter::once(x).chain(points.into_iter().skip(skip)).collect();
             path.dedup_by(|a, b| a.dist(*b) < 1e-9);
             if path.len() < 2 {
@@ -199,7 +211,7 @@ pub fn horizon_reference(world: &World, config: &HorizonConfig) -> Result<Horizo
             break;
         }
     }
-    Ok(HorizonRun { reached, driven_m: driven, plans, track })
+    Ok(HorizonRun { reached, driven_m: driven, plans, optimal_m, track })
 }
 
 /// The true hazard cells grown by `margin` (see [`Grid2::dilate_into`]).
@@ -224,7 +236,6 @@ fn corner_cell(g: &GridGeometry, p: Point2) -> Option<Cell> {
 fn sense(
     truth: &Grid2<bool>,
     known: &mut Grid2<bool>,
-    blocked: &mut Grid2<bool>,
     x: Point2,
     heading: f64,
     config: &HorizonConfig,
@@ -252,7 +263,6 @@ fn sense(
             *known.get_mut(col, row) = true;
             let cell = Cell::new(row, col);
             if *truth.get(col, row) && !pads.contains(&cell) {
-                *blocked.get_mut(col, row) = true;
                 changes.push(CellChange { cell, cost: f32::INFINITY });
             }
         }
@@ -264,61 +274,6 @@ fn sense(
 fn angle_between(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
     d.min(std::f64::consts::TAU - d)
-}
-
-/// Whether the polyline passes through (or along the boundary of) a cell.
-fn path_crosses(g: &GridGeometry, path: &[Point2], cell: Cell) -> bool {
-    let (cx, cy) = g.center(cell.col, cell.row);
-    let half = 0.5 * g.resolution + 1e-6;
-    path.windows(2).any(|w| segment_meets_box(w[0], w[1], Point2::new(cx, cy), half))
-}
-
-/// Whether segment a-b meets the axis-aligned square of half side `half` about `c`.
-fn segment_meets_box(a: Point2, b: Point2, c: Point2, half: f64) -> bool {
-    // Liang-Barsky clipping of the segment against the square.
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-dx, a.x - (c.x - half)),
-        (dx, (c.x + half) - a.x),
-        (-dy, a.y - (c.y - half)),
-        (dy, (c.y + half) - a.y),
-    ] {
-        if p.abs() < 1e-15 {
-            if q < 0.0 {
-                return false;
-            }
-        } else {
-            let t = q / p;
-            if p < 0.0 {
-                t0 = t0.max(t);
-            } else {
-                t1 = t1.min(t);
-            }
-            if t0 > t1 {
-                return false;
-            }
-        }
-    }
-    true
-}
-
-/// Whether the segment passes through the interior of no known hazard cell (running along a
-/// hazard cell's edge is allowed, as on Field D*'s paths).
-fn segment_free(blocked: &Grid2<bool>, a: Point2, b: Point2) -> bool {
-    let g = blocked.geometry;
-    let index = |v: f64, origin: f64, n: usize| {
-        ((v - origin) / g.resolution).floor().clamp(0.0, n as f64 - 1.0) as usize
-    };
-    let (c0, c1) = (index(a.x.min(b.x), g.origin_x, g.cols), index(a.x.max(b.x), g.origin_x, g.cols));
-    let (r0, r1) = (index(a.y.min(b.y), g.origin_y, g.rows), index(a.y.max(b.y), g.origin_y, g.rows));
-    let half = 0.5 * g.resolution - 1e-6;
-    (r0..=r1).all(|row| {
-        (c0..=c1).all(|col| {
-            let (cx, cy) = g.center(col, row);
-            !*blocked.get(col, row) || !segment_meets_box(a, b, Point2::new(cx, cy), half)
-        })
-    })
 }
 
 /// Distance along a-b at which the rover first comes within `tolerance` of the goal, if it does.

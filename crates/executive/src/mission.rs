@@ -665,6 +665,19 @@ mod tests {
     }
 
     #[test]
+    fn a_sensor_override_takes_the_place_of_the_given_field_only() {
+        let own =
+            SensorSpec { compass_sigma_deg: Some(2.0), stereo_dropout: Some(0.2), ..Default::default() };
+        let over =
+            SensorSpec { stereo_dropout: Some(0.0), stereo_noise_scale: Some(0.5), ..Default::default() };
+        let merged = own.overridden_by(&over);
+        assert_eq!(merged.compass_sigma_deg, Some(2.0));
+        assert_eq!(merged.stereo_dropout, Some(0.0));
+        assert_eq!(merged.stereo_noise_scale, Some(0.5));
+        assert_eq!(own.overridden_by(&SensorSpec::default()), own);
+    }
+
+    #[test]
     fn invalid_value_names_the_field() {
         let text = DEFAULT_MISSION_TOML.replace("rock_abundance = 0.16", "rock_abundance = 3.0");
         let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();

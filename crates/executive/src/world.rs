@@ -271,15 +271,26 @@ pub fn long_yard_world(seed: u64, length: f64, height: f64, end_margin: f64) -> 
 }
 
 /// Cell size of the ground-truth hazard grid used for the optimal path (m).
-const OPTIMAL_PATH_RESOLUTION: f64 = 0.1;
+pub const OPTIMAL_PATH_RESOLUTION: f64 = 0.1;
 
 /// Length of the shortest safe path with full knowledge of the true terrain (m), if one exists:
 /// Field D* (any-angle) through the cells where the simulator's hazard model says the rover
 /// centre is safe in every heading.
 pub fn optimal_length(world: &World) -> Option<f64> {
-    let hazard = rovernav_sim::true_hazard_grid(&world.terrain, &world.rover, OPTIMAL_PATH_RESOLUTION);
+    optimal_length_on(world, &true_hazard(world))
+}
+
+/// The simulator's hazard truth the optimal length is planned on (cells where the rover
+/// centre is unsafe in some heading, at [`OPTIMAL_PATH_RESOLUTION`]).
+pub fn true_hazard(world: &World) -> rovernav_core::Grid2<bool> {
+    rovernav_sim::true_hazard_grid(&world.terrain, &world.rover, OPTIMAL_PATH_RESOLUTION)
+}
+
+/// [`optimal_length`] through the safe cells of a hazard grid already computed by
+/// [`true_hazard`].
+pub fn optimal_length_on(world: &World, hazard: &rovernav_core::Grid2<bool>) -> Option<f64> {
     let g = hazard.geometry;
-    let mut grid = CostGrid::from_occupancy(&hazard);
+    let mut grid = CostGrid::from_occupancy(hazard);
     grid.set_geometry(g);
     let cell = |p: Point2| g.cell_of(p.x, p.y).map(|(c, r)| Cell::new(r, c));
     let (start, goal) = (cell(world.start.position())?, cell(world.goal.position)?);

@@ -10,9 +10,9 @@
 
 use crate::eval_terrain::parse_seed_range;
 use anyhow::Context;
+use rayon::prelude::*;
 use rovernav_campaign::{Row, TerrainKind};
-use rovernav_executive::horizon::{HorizonConfig, horizon_reference};
-use rovernav_executive::world::optimal_length;
+use rovernav_executive::horizon::{HorizonConfig, HorizonRun, horizon_reference};
 use rovernav_executive::{Mission, build_world};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -54,16 +54,13 @@ pub struct EvalHorizonArgs {
 /// One seed's reference run.
 struct SeedRow {
     seed: u64,
-    optimal_m: Option<f64>,
-    driven_m: f64,
-    reached: bool,
-    plans: usize,
+    run: HorizonRun,
 }
 
 impl SeedRow {
     /// Distance driven over the optimal length, when reached.
     fn ratio(&self) -> Option<f64> {
-        self.optimal_m.filter(|_| self.reached).map(|o| self.driven_m / o)
+        self.run.optimal_m.filter(|_| self.run.reached).map(|o| self.run.driven_m / o)
     }
 }
 
@@ -90,38 +87,9 @@ fn reference_rows(
         let mut mission = template.clone();
         mission.seed = seed;
         let world = build_world(&mission, origin)?;
-        let run = horizon_reference(&world, config)?;
-        Ok(SeedRow {
-            seed,
-            optimal_m: optimal_length(&world),
-            driven_m: run.driven_m,
-            reached: run.reached,
-            plans: run.plans,
-        })
+        Ok(SeedRow { seed, run: horizon_reference(&world, config)? })
     };
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(seeds.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut rows: Vec<Option<anyhow::Result<SeedRow>>> = seeds.iter().map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let Some(&seed) = seeds.get(i) else { break done };
-                        done.push((i, one(seed)));
-                    }
-                })
-            })
-            .collect();
-        for w in workers {
-            for (i, r) in w.join().expect("a reference worker") {
-                rows[i] = Some(r);
-            }
-        }
-    });
-    rows.into_iter().map(|r| r.expect("every seed run")).collect()
+    seeds.par_iter().map(|&seed| one(seed)).collect()
 }
 
 /// The campaign's runs on these terrains (its yards for a procedural mission, its trials of
@@ -146,7 +114,7 @@ fn campaign_runs(
         }
         // The same seed of a differently generated yard would compare unlike terrains: the
         // optimal lengths tell.
-        if let (Some(a), Some(b)) = (run.optimal_length_m, reference.optimal_m)
+        if let (Some(a), Some(b)) = (run.optimal_length_m, reference.run.optimal_m)
             && (a - b).abs() > 1e-6 * b.max(1.0)
         {
             anyhow::bail!(
@@ -190,7 +158,7 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
 
     let ratios: Vec<f64> = rows.iter().filter_map(SeedRow::ratio).collect();
     let (mean, median) = mean_median(&ratios);
-    let reached = rows.iter().filter(|r| r.reached).count();
+    let reached = rows.iter().filter(|r| r.run.reached).count();
     // Per navigator: its mean ratio and the reference's over the seeds both reached.
     let paired: Vec<(String, usize, f64, f64)> = navs
         .iter()
@@ -208,11 +176,11 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
             .map(|r| {
                 let mut v = serde_json::json!({
                     "seed": r.seed,
-                    "reached": r.reached,
-                    "driven_m": r.driven_m,
-                    "optimal_length_m": r.optimal_m,
+                    "reached": r.run.reached,
+                    "driven_m": r.run.driven_m,
+                    "optimal_length_m": r.run.optimal_m,
                     "path_ratio": r.ratio(),
-                    "plans": r.plans,
+                    "plans": r.run.plans,
                 });
                 if !navs.is_empty() {
                     v["navigators"] = navs
@@ -271,11 +239,11 @@ pub fn run(args: EvalHorizonArgs) -> anyhow::Result<()> {
         println!(
             "{:>4}  {:>7}  {:>10.2}  {:>11}  {:>5}  {:>5}{nav_cols}",
             r.seed,
-            if r.reached { "yes" } else { "no" },
-            r.driven_m,
-            r.optimal_m.map_or("-".into(), |o| format!("{o:.2}")),
+            if r.run.reached { "yes" } else { "no" },
+            r.run.driven_m,
+            r.run.optimal_m.map_or("-".into(), |o| format!("{o:.2}")),
             r.ratio().map_or("-".into(), |x| format!("{x:.3}")),
-            r.plans
+            r.run.plans
         );
     }
     println!(
