@@ -228,6 +228,12 @@ pub struct RoverBugConfig {
     /// cell mean at 4-5 m averages many points instead of one or two noisy ones, at twice the
     /// capture time (README.md, session 21).
     pub fine_mast: bool,
+    /// C-obstacle cells below the ground plane count as pits only in the window centred on
+    /// them (1) rather than in any window (0): beside a large rock the window's ground
+    /// refits onto the rock and the open ground next to it reads as a pit.
+    pub pits_in_own_window: bool,
+    /// The same for the safety layer.
+    pub safety_pits_in_own_window: bool,
 }
 
 impl Default for RoverBugConfig {
@@ -260,6 +266,8 @@ impl Default for RoverBugConfig {
             near_side_reach: true,
             wander_limit: 2.0,
             fine_mast: false,
+            pits_in_own_window: false,
+            safety_pits_in_own_window: false,
         }
     }
 }
@@ -426,6 +434,18 @@ impl RoverBugConfig {
                 unit: Switch,
                 field: |c| Field::Bool(&mut c.fine_mast),
             },
+            Param {
+                name: "pits_in_own_window",
+                doc: "1: a C-obstacle cell below the ground plane is a pit only in the window centred on it (beside a large rock the ground refits onto the rock); 0: in any window",
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.pits_in_own_window),
+            },
+            Param {
+                name: "safety_pits_in_own_window",
+                doc: "pits_in_own_window for the safety layer's hazard cells",
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.safety_pits_in_own_window),
+            },
         ]
     }
 }
@@ -554,6 +574,7 @@ pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> Terra
         max_tilt: rover.max_tilt * HAZARD_MARGIN,
         safety_buffer: config.safety_buffer,
         rover_radius: if config.growth_radius > 0.0 { config.growth_radius } else { rover.radius() },
+        pits_in_own_window: config.pits_in_own_window,
         ..TerrainConfig::for_rover(rover)
     }
 }
@@ -567,6 +588,7 @@ pub fn safety_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainCo
         resolution: T_GRID_RESOLUTION,
         hazard_height: HazardHeight::Top,
         clearance: rover.clearance * config.safety_clearance_margin,
+        pits_in_own_window: config.safety_pits_in_own_window,
         ..c_obstacle_terrain(rover, config)
     }
 }

@@ -98,6 +98,9 @@ pub struct TerrainConfig {
     /// within which a raised cell counts as reaching the step limit; such hazards are flagged
     /// uncertain. 0 = the measured height must exceed the limit itself.
     pub hazard_confidence: f64,
+    /// Low cells are pits only where the window centred on them finds them low (see
+    /// [`crate::footprint::FootprintParams::pits_in_own_window`]).
+    pub pits_in_own_window: bool,
 }
 
 impl Default for TerrainConfig {
@@ -130,6 +133,7 @@ impl TerrainConfig {
             density: DensityConfig::default(),
             range_noise: None,
             hazard_confidence: 0.0,
+            pits_in_own_window: false,
         }
     }
 
@@ -226,6 +230,7 @@ impl TerrainConfig {
             min_cells: ((self.min_window_fraction * window).ceil() as usize).max(3),
             step_limit: self.clearance,
             slope_limit: self.max_tilt,
+            pits_in_own_window: self.pits_in_own_window,
         }
     }
 

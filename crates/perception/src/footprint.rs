@@ -47,6 +47,10 @@ pub struct FootprintParams {
     pub step_limit: f64,
     /// Plane tilt above which a window is hazardous (rad).
     pub slope_limit: f64,
+    /// Cells below the ground plane count as obstacles (pits) only in the window centred on
+    /// them: beside a rock that fills most of a window, the refitted "ground" is the rock and
+    /// the open ground next to it reads as a pit, while a real pit is low in its own window.
+    pub pits_in_own_window: bool,
 }
 
 /// Per-cell results of the footprint analysis, row-major, NaN where not assessed.
@@ -252,6 +256,7 @@ fn mark_off_ground_cells(
     scratch: &mut Vec<WindowCell>,
     obstacle: &mut [bool],
     uncertain: &mut [bool],
+    (centre, pits_in_own_window): (usize, bool),
 ) -> (f64, f64) {
     scratch.clear();
     for rr in r0..r1 {
@@ -283,7 +288,8 @@ fn mark_off_ground_cells(
         let i = w.row * cols + w.col;
         let t = tolerance_at(tolerance, i);
         let off = w.z - (a + b * w.col as f64 + c * w.row as f64);
-        if off.abs() > limit {
+        let own = i == centre || !pits_in_own_window;
+        if off > limit || (own && -off > limit) {
             obstacle[i] = true;
         } else if off + t > limit {
             // Only upwards: a sparse cell's top misses the crest of a rock seen from one side,
@@ -378,6 +384,7 @@ pub fn analyse_footprints_with_tolerance(
                     &mut scratch,
                     &mut out.obstacle,
                     &mut uncertain,
+                    (i, params.pits_in_own_window),
                 );
                 ground_slope = (gb.hypot(gc) / resolution).atan();
             }
@@ -398,7 +405,13 @@ mod tests {
     use super::*;
 
     fn params() -> FootprintParams {
-        FootprintParams { half_window: 3, min_cells: 12, step_limit: 0.18, slope_limit: 25f64.to_radians() }
+        FootprintParams {
+            half_window: 3,
+            min_cells: 12,
+            step_limit: 0.18,
+            slope_limit: 25f64.to_radians(),
+            pits_in_own_window: false,
+        }
     }
 
     fn grid(cols: usize, rows: usize, f: impl Fn(f64, f64) -> f64) -> Vec<f32> {
@@ -495,6 +508,56 @@ mod tests {
                 if out.obstacle[r * 25 + c] {
                     assert!((8..=15).contains(&c), "cell ({c}, {r})");
                 }
+            }
+        }
+    }
+
+    /// A 0.5 m block over cells 11..20 x 11..20 of a 31 x 31 flat grid: wider than a window.
+    fn large_block() -> Vec<f32> {
+        let mut h = grid(31, 31, |_, _| 0.0);
+        for r in 11..20 {
+            for c in 11..20 {
+                h[r * 31 + c] = 0.5;
+            }
+        }
+        h
+    }
+
+    #[test]
+    fn beside_a_block_wider_than_a_window_fewer_ground_cells_read_as_pits_when_pits_need_their_own_window() {
+        let h = large_block();
+        let block = |i: usize| (11..20).contains(&(i / 31)) && (11..20).contains(&(i % 31));
+        // Windows centred on the block's edge refit their ground onto the block, and the open
+        // ground beside it reads as a pit.
+        let any = analyse_footprints(&h, 31, 31, 0.15, &params());
+        let own = FootprintParams { pits_in_own_window: true, ..params() };
+        let out = analyse_footprints(&h, 31, 31, 0.15, &own);
+        let ground =
+            |o: &FootprintLayers| (0..31 * 31).filter(|&i| o.obstacle[i] && !block(i)).collect::<Vec<_>>();
+        let (before, after) = (ground(&any), ground(&out));
+        assert!(after.iter().all(|i| before.contains(i)), "the option only removes pits");
+        assert!(
+            after.len() + 10 <= before.len(),
+            "{} ground cells marked, {} before",
+            after.len(),
+            before.len()
+        );
+        // The block's rim still stands out of the ground around it.
+        for k in 11..20 {
+            assert!(out.obstacle[11 * 31 + k] && out.obstacle[19 * 31 + k], "rim at column {k}");
+        }
+        // A real pit is low in its own window.
+        let mut pit = grid(25, 25, |_, _| 0.0);
+        for r in 11..14 {
+            for c in 11..14 {
+                pit[r * 25 + c] = -0.3;
+            }
+        }
+        let out = analyse_footprints(&pit, 25, 25, 0.15, &own);
+        for r in 0..25 {
+            for c in 0..25 {
+                let inside = (11..14).contains(&r) && (11..14).contains(&c);
+                assert_eq!(out.obstacle[r * 25 + c], inside, "cell ({c}, {r})");
             }
         }
     }

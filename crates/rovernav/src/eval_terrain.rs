@@ -15,8 +15,9 @@
 use anyhow::Context;
 use rovernav_core::{NavCommand, Point2, Pose3, PoseEstimate, SenseRequest};
 use rovernav_executive::{Mission, build_world};
-use rovernav_navigation::TerrainModel;
+use rovernav_navigation::params::configured;
 use rovernav_navigation::roverbug::{RoverBugConfig, c_obstacle_terrain, safety_terrain};
+use rovernav_navigation::{NavigatorParams, TerrainModel};
 use rovernav_perception::TerrainConfig;
 use rovernav_perception::TerrainEvaluator;
 use rovernav_perception::evaluation::{TrueRock, evaluate_terrain};
@@ -34,6 +35,10 @@ pub struct EvalTerrainArgs {
     /// Hazard model to evaluate.
     #[arg(long, value_enum, default_value_t = HazardModel::Grid)]
     pub model: HazardModel,
+    /// Set a RoverBug parameter for the RoverBug models, NAME=VALUE (repeatable; `rovernav
+    /// navigators` lists them).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
 }
 
 /// The hazard models `rovernav eval terrain` can score.
@@ -53,14 +58,26 @@ impl HazardModel {
         clap::ValueEnum::to_possible_value(&self).map_or_else(String::new, |v| v.get_name().to_string())
     }
 
-    /// The perception settings of this model for a rover.
-    fn config(self, rover: &rovernav_core::RoverConfig) -> TerrainConfig {
-        let roverbug = RoverBugConfig::default();
-        match self {
-            HazardModel::Grid => TerrainModel::perception_config(rover, 0.1),
-            HazardModel::Roverbug => c_obstacle_terrain(rover, &roverbug),
-            HazardModel::RoverbugSafety => safety_terrain(rover, &roverbug),
+    /// The perception settings of this model for a rover, with RoverBug's parameters `params`
+    /// (the grid model takes none).
+    fn config(
+        self,
+        rover: &rovernav_core::RoverConfig,
+        params: &NavigatorParams,
+    ) -> anyhow::Result<TerrainConfig> {
+        if self == HazardModel::Grid {
+            anyhow::ensure!(
+                params.is_empty(),
+                "--param: the grid model takes no parameters (only the roverbug models)"
+            );
+            return Ok(TerrainModel::perception_config(rover, 0.1));
         }
+        let roverbug = configured("roverbug", RoverBugConfig::default(), &RoverBugConfig::params(), params)
+            .map_err(|e| anyhow::anyhow!("--param: {e}"))?;
+        Ok(match self {
+            HazardModel::Roverbug => c_obstacle_terrain(rover, &roverbug),
+            _ => safety_terrain(rover, &roverbug),
+        })
     }
 }
 
@@ -84,8 +101,15 @@ pub fn parse_seed_range(s: &str) -> anyhow::Result<std::ops::RangeInclusive<u64>
 /// Runs the evaluation and prints the figures.
 pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
     let seeds = parse_seed_range(&args.seeds)?;
-    let (mut rocks, mut detected, mut safe, mut false_hazards, mut cells) =
-        (0usize, 0usize, 0usize, 0usize, 0usize);
+    let mut params = NavigatorParams::new();
+    for param in &args.params {
+        let (name, value) = crate::parse_param(param)?;
+        params.insert(name, value);
+    }
+    // Bad parameters fail before any seed is imaged.
+    args.model.config(&rovernav_core::RoverConfig::default(), &params)?;
+    let (mut rocks, mut detected, mut safe, mut false_hazards, mut cells, mut hazard_cells) =
+        (0usize, 0usize, 0usize, 0usize, 0usize, 0usize);
     let mut sq_err_sum = 0.0;
     for seed in seeds.clone() {
         let mut mission = Mission::default_mission();
@@ -116,7 +140,7 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
             },
             covariance: [[0.0; 3]; 3],
         };
-        let detector = args.model.config(&world.rover);
+        let detector = args.model.config(&world.rover, &params)?;
         let resolution = detector.resolution;
         let mut evaluator = TerrainEvaluator::new(detector, world.start)?;
         let layers = evaluator.update(&frame.clouds, &estimate);
@@ -142,6 +166,7 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
         safe += f.truly_safe_cells;
         false_hazards += f.false_hazard_cells;
         cells += f.sensed_cells;
+        hazard_cells += f.hazard_cells;
         if f.elevation_rmse_m.is_finite() {
             sq_err_sum += f.elevation_rmse_m.powi(2) * f.sensed_cells as f64;
         }
@@ -161,6 +186,7 @@ pub fn run(args: EvalTerrainArgs) -> anyhow::Result<()> {
             "truly_safe_cells": safe,
             "false_hazard_cells": false_hazards,
             "sensed_cells": cells,
+            "hazard_cells": hazard_cells,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

@@ -122,14 +122,8 @@ impl MissionToRun {
             origin_of_navigator = "--navigator".into();
         }
         for param in &args.params {
-            let Some((name, value)) = param.split_once('=') else {
-                anyhow::bail!("--param `{param}`: expected NAME=VALUE");
-            };
-            let value: f64 = value
-                .trim()
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--param `{param}`: the value is not a number"))?;
-            mission.navigator_params.insert(name.trim().to_string(), value);
+            let (name, value) = parse_param(param)?;
+            mission.navigator_params.insert(name, value);
         }
         if let Err(e) = rovernav_navigation::check_params(&mission.navigator, &mission.navigator_params) {
             anyhow::bail!("--param: {e}");
@@ -243,4 +237,14 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         println!("outputs in {}", out_dir.display());
     }
     Ok(())
+}
+
+/// One `--param NAME=VALUE` option, its name trimmed.
+pub(crate) fn parse_param(param: &str) -> anyhow::Result<(String, f64)> {
+    let Some((name, value)) = param.split_once('=') else {
+        anyhow::bail!("--param `{param}`: expected NAME=VALUE");
+    };
+    let value: f64 =
+        value.trim().parse().map_err(|_| anyhow::anyhow!("--param `{param}`: the value is not a number"))?;
+    Ok((name.trim().to_string(), value))
 }

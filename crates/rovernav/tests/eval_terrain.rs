@@ -5,10 +5,16 @@ use std::process::Command;
 
 /// The JSON figures of one model on seeds 1..5.
 fn figures(model: &str) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_rovernav"))
-        .args(["eval", "terrain", "--json", "--seeds", "1..5", "--model", model])
-        .output()
-        .expect("run rovernav");
+    figures_with(model, &[])
+}
+
+/// [`figures`] with `--param` options.
+fn figures_with(model: &str, params: &[&str]) -> serde_json::Value {
+    let mut args = vec!["eval", "terrain", "--json", "--seeds", "1..5", "--model", model];
+    for p in params {
+        args.extend(["--param", p]);
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_rovernav")).args(&args).output().expect("run rovernav");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     serde_json::from_slice(&out.stdout).expect("JSON figures")
 }
@@ -45,4 +51,35 @@ fn an_unknown_hazard_model_is_named_in_the_error() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("lidar-magic") && stderr.contains("roverbug-safety"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn pits_in_their_own_window_only_drop_false_hazards_beside_large_rocks() {
+    // The same views and truth: the option only removes low cells some other window marked.
+    let plain = figures("roverbug");
+    let own = figures_with("roverbug", &["pits_in_own_window=1"]);
+    let (f0, f1) = (get(&plain, "false_hazard_cells"), get(&own, "false_hazard_cells"));
+    let (r0, r1) = (get(&plain, "hazard_rocks_detected"), get(&own, "hazard_rocks_detected"));
+    eprintln!("false hazard cells {f0} -> {f1}, rocks detected {r0} -> {r1}");
+    assert!(f1 < 0.9 * f0, "false hazard cells {f0} -> {f1}");
+    assert!(get(&own, "hazard_cells") < get(&plain, "hazard_cells"));
+    assert!(r1 <= r0 && r1 >= 0.9 * r0, "rocks detected {r0} -> {r1}");
+    assert_eq!(get(&plain, "sensed_cells"), get(&own, "sensed_cells"));
+}
+
+#[test]
+fn a_parameter_the_model_does_not_take_is_named_in_the_error() {
+    for (model, param, named) in [
+        ("roverbug", "pits_in_own_windw=1", "pits_in_own_windw"),
+        ("grid", "pits_in_own_window=1", "grid model takes no parameters"),
+        ("roverbug", "pits_in_own_window", "NAME=VALUE"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rovernav"))
+            .args(["eval", "terrain", "--seeds", "1", "--model", model, "--param", param])
+            .output()
+            .expect("run rovernav");
+        assert!(!out.status.success(), "{model} {param}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(named) && !stderr.contains("panicked"), "{stderr}");
+    }
 }
