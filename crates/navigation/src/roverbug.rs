@@ -229,11 +229,21 @@ pub struct RoverBugConfig {
     /// capture time (README.md, session 21).
     pub fine_mast: bool,
     /// C-obstacle cells below the ground plane count as pits only in the window centred on
-    /// them (1) rather than in any window (0): beside a large rock the window's ground
-    /// refits onto the rock and the open ground next to it reads as a pit.
+    /// them (1, the default) rather than in any window (0): beside a large rock the window's
+    /// ground refits onto the rock and the open ground next to it reads as a pit, widening
+    /// the C-obstacle by up to a metre (README.md, session 22).
     pub pits_in_own_window: bool,
-    /// The same for the safety layer.
+    /// The same for the safety layer (0, the default: measured with it, more contacts).
     pub safety_pits_in_own_window: bool,
+    /// The C-obstacle model's windows take as ground the refit holding the most cells, from
+    /// the whole-window plane or from level planes at the quartile heights (1, the default),
+    /// not only the refit from the whole-window plane, which beside a large rock stays tilted
+    /// between rock and ground (0). Meant with `pits_in_own_window`: alone it takes a rock
+    /// filling most of a window as the ground.
+    pub robust_ground: bool,
+    /// The same for the safety layer (1, the default: on top heights it raises recall and
+    /// halves the false hazards without `safety_pits_in_own_window`).
+    pub safety_robust_ground: bool,
 }
 
 impl Default for RoverBugConfig {
@@ -266,8 +276,10 @@ impl Default for RoverBugConfig {
             near_side_reach: true,
             wander_limit: 2.0,
             fine_mast: false,
-            pits_in_own_window: false,
+            pits_in_own_window: true,
             safety_pits_in_own_window: false,
+            robust_ground: true,
+            safety_robust_ground: true,
         }
     }
 }
@@ -446,6 +458,18 @@ impl RoverBugConfig {
                 unit: Switch,
                 field: |c| Field::Bool(&mut c.safety_pits_in_own_window),
             },
+            Param {
+                name: "robust_ground",
+                doc: "1: a C-obstacle window's ground is the refit holding the most cells (from the whole-window plane or level planes at the quartile heights); 0: the refit from the whole-window plane",
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.robust_ground),
+            },
+            Param {
+                name: "safety_robust_ground",
+                doc: "robust_ground for the safety layer's hazard cells",
+                unit: Switch,
+                field: |c| Field::Bool(&mut c.safety_robust_ground),
+            },
         ]
     }
 }
@@ -575,6 +599,7 @@ pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> Terra
         safety_buffer: config.safety_buffer,
         rover_radius: if config.growth_radius > 0.0 { config.growth_radius } else { rover.radius() },
         pits_in_own_window: config.pits_in_own_window,
+        robust_ground: config.robust_ground,
         ..TerrainConfig::for_rover(rover)
     }
 }
@@ -589,6 +614,7 @@ pub fn safety_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainCo
         hazard_height: HazardHeight::Top,
         clearance: rover.clearance * config.safety_clearance_margin,
         pits_in_own_window: config.safety_pits_in_own_window,
+        robust_ground: config.safety_robust_ground,
         ..c_obstacle_terrain(rover, config)
     }
 }

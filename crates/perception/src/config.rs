@@ -101,6 +101,9 @@ pub struct TerrainConfig {
     /// Low cells are pits only where the window centred on them finds them low (see
     /// [`crate::footprint::FootprintParams::pits_in_own_window`]).
     pub pits_in_own_window: bool,
+    /// A hazardous window's ground is the refit holding the most cells (see
+    /// [`crate::footprint::FootprintParams::robust_ground`]).
+    pub robust_ground: bool,
 }
 
 impl Default for TerrainConfig {
@@ -134,6 +137,7 @@ impl TerrainConfig {
             range_noise: None,
             hazard_confidence: 0.0,
             pits_in_own_window: false,
+            robust_ground: false,
         }
     }
 
@@ -231,6 +235,7 @@ impl TerrainConfig {
             step_limit: self.clearance,
             slope_limit: self.max_tilt,
             pits_in_own_window: self.pits_in_own_window,
+            robust_ground: self.robust_ground,
         }
     }
 

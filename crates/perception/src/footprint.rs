@@ -51,6 +51,12 @@ pub struct FootprintParams {
     /// them: beside a rock that fills most of a window, the refitted "ground" is the rock and
     /// the open ground next to it reads as a pit, while a real pit is low in its own window.
     pub pits_in_own_window: bool,
+    /// The ground of a hazardous window is the refit holding the most cells, from the
+    /// whole-window plane or from level planes at the lower and upper quartile heights (see
+    /// `window_ground`), not only the refit from the whole-window plane. On its own it takes a
+    /// rock filling most of a window as the ground; with `pits_in_own_window` the open ground
+    /// beside the rock is no longer a pit anywhere.
+    pub robust_ground: bool,
 }
 
 /// Per-cell results of the footprint analysis, row-major, NaN where not assessed.
@@ -228,6 +234,68 @@ fn fit_ground(cells: &[WindowCell]) -> Option<(f64, f64, f64)> {
     Some((mz - b * mx - c * my, b, c))
 }
 
+/// Residual of a window cell about the plane `(a, b, c)`.
+#[inline]
+fn residual(w: &WindowCell, (a, b, c): (f64, f64, f64)) -> f64 {
+    w.z - (a + b * w.col as f64 + c * w.row as f64)
+}
+
+/// Refits the ground from `start`: the cells within `band` of the current plane, until that
+/// set stops changing. Returns the plane and how many cells lie on it.
+fn refit_ground(cells: &mut [WindowCell], start: (f64, f64, f64), band: f64) -> ((f64, f64, f64), usize) {
+    let mut plane = start;
+    for w in cells.iter_mut() {
+        w.off_ground = false;
+    }
+    for _round in 0..6 {
+        let mut changed = false;
+        for w in cells.iter_mut() {
+            let off = residual(w, plane).abs() > band;
+            changed |= off != w.off_ground;
+            w.off_ground = off;
+        }
+        if !changed {
+            break;
+        }
+        match fit_ground(cells) {
+            Some(p) => plane = p,
+            None => break,
+        }
+    }
+    (plane, cells.iter().filter(|w| residual(w, plane).abs() <= band).count())
+}
+
+/// The ground of a window: refitted from the whole-window plane and, with `robust`, also from
+/// level planes at the lower and upper quartile cell heights, keeping the fit that holds the
+/// most cells (the whole-window refit on a tie). Beside a rock filling much of the window the
+/// whole-window plane is tilted between rock and ground with few cells near it, and a refit
+/// from it cannot leave it.
+fn window_ground(
+    cells: &mut [WindowCell],
+    whole: (f64, f64, f64),
+    band: f64,
+    robust: bool,
+) -> (f64, f64, f64) {
+    let mut best = refit_ground(cells, whole, band);
+    if robust {
+        // Level planes at the lower and upper quartile heights: one of them lies in the ground
+        // however much of the window a rock fills, and the refit tilts it onto the ground.
+        let mut z: Vec<f64> = cells.iter().map(|w| w.z).collect();
+        if !z.is_empty() {
+            let n = z.len();
+            let lower = *z.select_nth_unstable_by(n / 4, f64::total_cmp).1;
+            let upper = *z.select_nth_unstable_by(3 * n / 4, f64::total_cmp).1;
+            for q in [lower, upper] {
+                let fit = refit_ground(cells, (q, 0.0, 0.0), band);
+                if fit.1 > best.1 {
+                    best = fit;
+                }
+            }
+        }
+    }
+    best.0
+}
+
 /// Tolerance of cell `i` (m): zero when missing, negative or not finite.
 #[inline]
 fn tolerance_at(tolerance: &[f32], i: usize) -> f64 {
@@ -256,7 +324,7 @@ fn mark_off_ground_cells(
     scratch: &mut Vec<WindowCell>,
     obstacle: &mut [bool],
     uncertain: &mut [bool],
-    (centre, pits_in_own_window): (usize, bool),
+    (centre, pits_in_own_window, robust_ground): (usize, bool, bool),
 ) -> (f64, f64) {
     scratch.clear();
     for rr in r0..r1 {
@@ -267,23 +335,7 @@ fn mark_off_ground_cells(
             }
         }
     }
-    let (mut a, mut b, mut c) = (plane.a, plane.b, plane.c);
-    // Ground: the cells within half the limit of the current plane; refit until stable.
-    for _round in 0..6 {
-        let mut changed = false;
-        for w in scratch.iter_mut() {
-            let off = (w.z - (a + b * w.col as f64 + c * w.row as f64)).abs() > 0.5 * limit;
-            changed |= off != w.off_ground;
-            w.off_ground = off;
-        }
-        if !changed {
-            break;
-        }
-        match fit_ground(scratch) {
-            Some((na, nb, nc)) => (a, b, c) = (na, nb, nc),
-            None => break,
-        }
-    }
+    let (a, b, c) = window_ground(scratch, (plane.a, plane.b, plane.c), 0.5 * limit, robust_ground);
     for w in scratch.iter() {
         let i = w.row * cols + w.col;
         let t = tolerance_at(tolerance, i);
@@ -384,7 +436,7 @@ pub fn analyse_footprints_with_tolerance(
                     &mut scratch,
                     &mut out.obstacle,
                     &mut uncertain,
-                    (i, params.pits_in_own_window),
+                    (i, params.pits_in_own_window, params.robust_ground),
                 );
                 ground_slope = (gb.hypot(gc) / resolution).atan();
             }
@@ -411,6 +463,7 @@ mod tests {
             step_limit: 0.18,
             slope_limit: 25f64.to_radians(),
             pits_in_own_window: false,
+            robust_ground: false,
         }
     }
 
@@ -431,6 +484,8 @@ mod tests {
         let h = grid(30, 30, |x, y| 3000.0 + g * (0.6 * x + 0.8 * y));
         let out = analyse_footprints(&h, 30, 30, 0.15, &params());
         assert!(out.obstacle.iter().all(|&o| !o));
+        let robust = FootprintParams { robust_ground: true, pits_in_own_window: true, ..params() };
+        assert_eq!(analyse_footprints(&h, 30, 30, 0.15, &robust), out);
         let centre = 15 * 30 + 15;
         assert!((out.slope[centre] as f64 - 20f64.to_radians()).abs() < 1e-3);
         assert!(out.step[centre] < 1e-3 && out.roughness[centre] < 1e-3);
@@ -453,13 +508,17 @@ mod tests {
                 h[r * 25 + c] = 0.25;
             }
         }
-        let out = analyse_footprints(&h, 25, 25, 0.15, &params());
-        for r in 0..25 {
-            for c in 0..25 {
-                let rock = (10..13).contains(&r) && (10..13).contains(&c);
-                assert_eq!(out.obstacle[r * 25 + c], rock, "cell ({c}, {r})");
+        let robust = FootprintParams { robust_ground: true, pits_in_own_window: true, ..params() };
+        for p in [params(), robust] {
+            let out = analyse_footprints(&h, 25, 25, 0.15, &p);
+            for r in 0..25 {
+                for c in 0..25 {
+                    let rock = (10..13).contains(&r) && (10..13).contains(&c);
+                    assert_eq!(out.obstacle[r * 25 + c], rock, "cell ({c}, {r}) {p:?}");
+                }
             }
         }
+        let out = analyse_footprints(&h, 25, 25, 0.15, &params());
         // The window centred on the rock sees the full 0.25 m step about its plane.
         assert!((out.step[11 * 25 + 11] - 0.25).abs() < 1e-5);
     }
@@ -524,7 +583,8 @@ mod tests {
     }
 
     #[test]
-    fn beside_a_block_wider_than_a_window_fewer_ground_cells_read_as_pits_when_pits_need_their_own_window() {
+    fn beside_a_block_wider_than_a_window_open_ground_reads_as_a_pit_unless_pits_need_their_own_window_and_a_robust_ground()
+     {
         let h = large_block();
         let block = |i: usize| (11..20).contains(&(i / 31)) && (11..20).contains(&(i % 31));
         // Windows centred on the block's edge refit their ground onto the block, and the open
@@ -546,6 +606,19 @@ mod tests {
         for k in 11..20 {
             assert!(out.obstacle[11 * 31 + k] && out.obstacle[19 * 31 + k], "rim at column {k}");
         }
+        // With the ground refitted robustly, none is: the ground beside the block is found in
+        // every window, and only the block stands out.
+        let robust = FootprintParams { robust_ground: true, ..own };
+        let out = analyse_footprints(&h, 31, 31, 0.15, &robust);
+        assert!(ground(&out).is_empty(), "ground cells marked: {:?}", ground(&out));
+        for k in 11..20 {
+            assert!(out.obstacle[11 * 31 + k] && out.obstacle[19 * 31 + k], "rim at column {k}");
+            assert!(out.obstacle[k * 31 + 11] && out.obstacle[k * 31 + 19], "rim at row {k}");
+        }
+        // Alone, the robust refit takes the block as the ground of the windows on it.
+        let alone =
+            analyse_footprints(&h, 31, 31, 0.15, &FootprintParams { robust_ground: true, ..params() });
+        assert!(ground(&alone).len() > before.len());
         // A real pit is low in its own window.
         let mut pit = grid(25, 25, |_, _| 0.0);
         for r in 11..14 {
@@ -553,11 +626,13 @@ mod tests {
                 pit[r * 25 + c] = -0.3;
             }
         }
-        let out = analyse_footprints(&pit, 25, 25, 0.15, &own);
-        for r in 0..25 {
-            for c in 0..25 {
-                let inside = (11..14).contains(&r) && (11..14).contains(&c);
-                assert_eq!(out.obstacle[r * 25 + c], inside, "cell ({c}, {r})");
+        for p in [own, robust] {
+            let out = analyse_footprints(&pit, 25, 25, 0.15, &p);
+            for r in 0..25 {
+                for c in 0..25 {
+                    let inside = (11..14).contains(&r) && (11..14).contains(&c);
+                    assert_eq!(out.obstacle[r * 25 + c], inside, "cell ({c}, {r}) {p:?}");
+                }
             }
         }
     }

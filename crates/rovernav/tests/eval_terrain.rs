@@ -53,11 +53,15 @@ fn an_unknown_hazard_model_is_named_in_the_error() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// The step models before session 22: every window's ground refitted from the whole-window
+/// plane only, low cells pits in any window.
+const WHOLE_WINDOW_GROUND: [&str; 3] = ["pits_in_own_window=0", "robust_ground=0", "safety_robust_ground=0"];
+
 #[test]
 fn pits_in_their_own_window_only_drop_false_hazards_beside_large_rocks() {
     // The same views and truth: the option only removes low cells some other window marked.
-    let plain = figures("roverbug");
-    let own = figures_with("roverbug", &["pits_in_own_window=1"]);
+    let plain = figures_with("roverbug", &WHOLE_WINDOW_GROUND);
+    let own = figures_with("roverbug", &["pits_in_own_window=1", "robust_ground=0"]);
     let (f0, f1) = (get(&plain, "false_hazard_cells"), get(&own, "false_hazard_cells"));
     let (r0, r1) = (get(&plain, "hazard_rocks_detected"), get(&own, "hazard_rocks_detected"));
     eprintln!("false hazard cells {f0} -> {f1}, rocks detected {r0} -> {r1}");
@@ -65,6 +69,22 @@ fn pits_in_their_own_window_only_drop_false_hazards_beside_large_rocks() {
     assert!(get(&own, "hazard_cells") < get(&plain, "hazard_cells"));
     assert!(r1 <= r0 && r1 >= 0.9 * r0, "rocks detected {r0} -> {r1}");
     assert_eq!(get(&plain, "sensed_cells"), get(&own, "sensed_cells"));
+}
+
+#[test]
+fn the_robust_ground_refit_cuts_both_models_false_hazards_and_keeps_their_recall() {
+    // RoverBug's defaults (pits in their own window and the robust refit for its C-obstacle
+    // model, the robust refit for its safety layer) against the step models before them, on
+    // the same views and truth.
+    for model in ["roverbug", "roverbug-safety"] {
+        let before = figures_with(model, &WHOLE_WINDOW_GROUND);
+        let now = figures(model);
+        let (f0, f1) = (get(&before, "false_hazard_cells"), get(&now, "false_hazard_cells"));
+        let (r0, r1) = (get(&before, "hazard_recall"), get(&now, "hazard_recall"));
+        eprintln!("{model}: false hazard cells {f0} -> {f1}, recall {r0:.3} -> {r1:.3}");
+        assert!(f1 < 0.6 * f0, "{model}: false hazard cells {f0} -> {f1}");
+        assert!(r1 >= r0 - 0.05, "{model}: recall {r0} -> {r1}");
+    }
 }
 
 #[test]
