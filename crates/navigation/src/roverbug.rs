@@ -73,6 +73,12 @@
 //! * the loop around `V_loop` proves the goal unreachable only when the positions of the
 //!   boundary-following segment wind around the goal (more than 3/4 of a turn): in clutter the
 //!   rover can come back near `V_loop` around another obstacle;
+//! * the step model's ground in each footprint window is the refit holding the most cells,
+//!   from the whole-window plane or from level planes at the quartile heights, and a low cell
+//!   is a pit only in the window centred on it (`robust_ground`, `pits_in_own_window`):
+//!   beside a rock wider than the window the whole-window refit stays tilted between rock and
+//!   ground or settles on the rock, and the open ground beside it read as a pit that widened
+//!   the C-obstacle by up to a metre;
 //! * cell means lose part of a small rock's height, so rocks just over the clearance can escape
 //!   the step/slope model behind the C-obstacles. A second, bounded memory of hazard cells on
 //!   top heights ([`HazardHeight::Top`], the grid navigators' setting) is kept in a 12 m

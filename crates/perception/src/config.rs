@@ -91,8 +91,8 @@ pub struct TerrainConfig {
     /// Which height of each cell the step/slope hazard model runs on.
     pub hazard_height: HazardHeight,
     /// Per-sensor range error; when set, each point carries the height noise its range and
-    /// viewing angle imply, and [`HazardHeight::Top`] discounts that instead of `sensor_noise`
-    /// alone.
+    /// viewing angle imply, which `hazard_confidence` turns into each cell's tolerance
+    /// ([`HazardHeight::Top`] discounts `sensor_noise` alone).
     pub range_noise: Option<SensorNoise>,
     /// Standard deviations of a cell's height noise beyond `sensor_noise` (from `range_noise`)
     /// within which a raised cell counts as reaching the step limit; such hazards are flagged

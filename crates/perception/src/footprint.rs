@@ -339,7 +339,8 @@ fn mark_off_ground_cells(
     for w in scratch.iter() {
         let i = w.row * cols + w.col;
         let t = tolerance_at(tolerance, i);
-        let off = w.z - (a + b * w.col as f64 + c * w.row as f64);
+        let off = residual(w, (a, b, c));
+        // A cell low only in another window's ground may be open ground beside a rock.
         let own = i == centre || !pits_in_own_window;
         if off > limit || (own && -off > limit) {
             obstacle[i] = true;
