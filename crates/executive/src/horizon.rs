@@ -15,7 +15,7 @@
 //! is never part of the autonomy.
 
 use crate::world::{OPTIMAL_PATH_RESOLUTION as RESOLUTION, World, optimal_length_on, true_hazard};
-use rovernav_core::{Grid2, GridGeometry, Point2};
+use rovernav_core::{Grid2, GridGeometry, Point2, angle_diff};
 use rovernav_planning::{Cell, CellChange, CostGrid, FieldDStar, GlobalPlanner};
 
 /// The reference rover's sensing and driving.
@@ -161,14 +161,12 @@ pub fn horizon_reference(world: &World, config: &HorizonConfig) -> Result<Horizo
             };
             let Ok(plan) = plan else { break };
             plans += 1;
-            let to_world =
-                |p: Point2| Point2::new(g.origin_x + p.x * RESOLUTION, g.origin_y + p.y * RESOLUTION);
-            let mut points: Vec<Point2> = plan.points.iter().map(|&p| to_world(p)).collect();
+            let grid = planner.grid().expect("the grid set above");
+            let mut points: Vec<Point2> = plan.points.iter().map(|&p| grid.grid_to_world(p)).collect();
             points.push(goal);
             // The plan starts at the lattice corner nearest the rover: join the rover straight
             // to a later point of the plan when nothing known blocks the way, so that snapping
             // to the lattice adds no length.
-            let grid = planner.grid().expect("the grid set above");
             let free =
                 |p: Point2| grid.segment_cost(grid.world_to_grid(x), grid.world_to_grid(p)).is_finite();
             let skip = (1..points.len().min(4)).rev().find(|&i| free(points[i])).unwrap_or(0);
@@ -257,7 +255,7 @@ fn sense(
             if d.norm() > config.range_m {
                 continue;
             }
-            if config.fov_deg < 360.0 && d.norm() > 1e-9 && angle_between(d.angle(), heading) > half_fov {
+            if config.fov_deg < 360.0 && d.norm() > 1e-9 && angle_diff(d.angle(), heading).abs() > half_fov {
                 continue;
             }
             *known.get_mut(col, row) = true;
@@ -268,12 +266,6 @@ fn sense(
         }
     }
     changes
-}
-
-/// Absolute difference of two angles, in [0, pi].
-fn angle_between(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
 }
 
 /// Distance along a-b at which the rover first comes within `tolerance` of the goal, if it does.

@@ -187,15 +187,11 @@ impl SensorSpec {
 
     /// The overrides as the lines of a mission file's `[sensors]` table (empty without any).
     pub fn toml_table(&self) -> String {
-        let lines: String = [
-            ("compass_sigma_deg", self.compass_sigma_deg),
-            ("stereo_dropout", self.stereo_dropout),
-            ("stereo_noise_scale", self.stereo_noise_scale),
-        ]
-        .iter()
-        .filter_map(|(k, v)| v.map(|v| format!("{k} = {v:?}\n")))
-        .collect();
-        if lines.is_empty() { lines } else { format!("\n[sensors]\n{lines}") }
+        if self.is_empty() {
+            return String::new();
+        }
+        let lines = toml::to_string(self).expect("a table of optional numbers serialises");
+        format!("\n[sensors]\n{lines}")
     }
 
     /// The first override out of range, as (field under `sensors.`, why).

@@ -280,11 +280,12 @@ fn window_ground(
     if robust {
         // Level planes at the lower and upper quartile heights: one of them lies in the ground
         // however much of the window a rock fills, and the refit tilts it onto the ground.
-        let mut z: Vec<f64> = cells.iter().map(|w| w.z).collect();
-        if !z.is_empty() {
-            let n = z.len();
-            let lower = *z.select_nth_unstable_by(n / 4, f64::total_cmp).1;
-            let upper = *z.select_nth_unstable_by(3 * n / 4, f64::total_cmp).1;
+        // The cells' order does not matter past the whole-window refit: select in place.
+        let n = cells.len();
+        if n > 0 {
+            let by_height = |a: &WindowCell, b: &WindowCell| a.z.total_cmp(&b.z);
+            let lower = cells.select_nth_unstable_by(n / 4, by_height).1.z;
+            let upper = cells.select_nth_unstable_by(3 * n / 4, by_height).1.z;
             for q in [lower, upper] {
                 let fit = refit_ground(cells, (q, 0.0, 0.0), band);
                 if fit.1 > best.1 {

@@ -66,14 +66,8 @@ impl SeedRow {
 
 /// Mean and median of some values (NaN when empty).
 fn mean_median(values: &[f64]) -> (f64, f64) {
-    if values.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
-    (v.iter().sum::<f64>() / n as f64, median)
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    (mean, rovernav_campaign::summary::median(values).unwrap_or(f64::NAN))
 }
 
 /// Runs the reference on every seed (in parallel) and returns the rows in seed order.
