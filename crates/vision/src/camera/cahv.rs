@@ -110,13 +110,7 @@ impl CameraModel for Cahv {
 impl Movable for Cahv {
     fn moved(&self, pose: &Isometry3<f64>) -> Self {
         let r = pose.rotation;
-        Self {
-            c: (pose * Point3::from(self.c)).coords,
-            a: r * self.a,
-            h: r * self.h,
-            v: r * self.v,
-            ..*self
-        }
+        Self { c: (pose * Point3::from(self.c)).coords, a: r * self.a, h: r * self.h, v: r * self.v, ..*self }
     }
 }
 
