@@ -7,6 +7,7 @@
 //! mounted camera, the world frame once moved by a pose).
 
 pub mod camera;
+pub mod codec;
 pub mod image;
 
 pub use camera::{CameraModel, Cahv, Ray};
