@@ -9,5 +9,6 @@
 pub mod camera;
 pub mod codec;
 pub mod image;
+pub mod rectify;
 
 pub use camera::{CameraModel, Cahv, Ray};
