@@ -8,6 +8,7 @@ mod eval_localization;
 mod eval_terrain;
 mod interactive;
 mod output;
+mod render_cmd;
 mod replay;
 
 use clap::{Parser, Subcommand};
@@ -46,6 +47,8 @@ enum Command {
     Rover(distributed::RoverArgs),
     /// Send one operator command to a running `rovernav rover` over zenoh (feature `zenoh`).
     Send(distributed::SendArgs),
+    /// Write what one of the rover's cameras sees of the mission's world (DIR/NAME.png).
+    Render(render_cmd::RenderArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -166,6 +169,7 @@ fn main() -> ExitCode {
         Some(Command::Sim(args)) => distributed::sim(args),
         Some(Command::Rover(args)) => distributed::rover(args),
         Some(Command::Send(args)) => distributed::send(args),
+        Some(Command::Render(args)) => render_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

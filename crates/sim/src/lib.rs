@@ -9,6 +9,7 @@
 
 pub mod hazard;
 pub mod raycast;
+pub mod render;
 pub mod sensors;
 pub mod simulator;
 pub mod vehicle;
