@@ -312,6 +312,12 @@ fn reads_a_mars_2020_raw_image_record() {
     let axis = m.unproject(&Point2::new(hc, vc)).direction;
     assert!(axis.dot(&m.a) > (0.5f64).to_radians().cos());
     check_round_trips(&m).unwrap();
+    // Older records carry the camera fields at the top level.
+    let mut record: serde_json::Value = serde_json::from_str(M2020_RECORD).unwrap();
+    let camera = record["camera"].take();
+    record["camera_model_type"] = camera["camera_model_type"].clone();
+    record["camera_model_component_list"] = camera["camera_model_component_list"].clone();
+    assert_eq!(read::from_m2020_json(&record, "flat.json").unwrap(), cam);
 }
 
 #[test]

@@ -10,8 +10,8 @@
 //!
 //! Unprojection inverts the distortion: with chi = |lambda| / zeta the distortion maps chi to
 //! chi' = (1 + r0) chi + r1 chi^3 + r2 chi^5, so the CAHV ray of the pixel gives chi' and a
-//! Newton iteration (safeguarded by bisection) recovers chi to machine precision. JPL's library
-//! iterates on the same radial polynomial.
+//! Newton iteration (safeguarded by bisection, and limited to the polynomial's first rising
+//! branch) recovers chi to machine precision. JPL's library iterates on the same polynomial.
 
 use nalgebra::{Isometry3, Matrix2x3, Matrix3, Point2, Point3, Unit, Vector3};
 
@@ -96,48 +96,35 @@ impl Cahvor {
     }
 }
 
-/// Solves (1 + r0) chi + r1 chi^3 + r2 chi^5 = target for the smallest chi >= 0: Newton steps,
-/// with bisection whenever a step leaves the bracket. Returns `None` when the polynomial never
-/// reaches `target` on the search range (the pixel lies outside the model's valid field).
+/// Solves (1 + r0) chi + r1 chi^3 + r2 chi^5 = target for the root on the polynomial's first
+/// rising branch: Newton steps from target / (1 + r0), with bisection whenever a step leaves
+/// the bracket. The branch ends where the derivative first vanishes (a quadratic in chi^2,
+/// solved in closed form); `None` when the polynomial turns over before reaching `target` (the
+/// pixel lies outside the model's valid field).
 pub(crate) fn invert_radial(r: &Vector3<f64>, target: f64) -> Option<f64> {
+    let k0 = 1.0 + r[0];
     let f = |x: f64| {
         let x2 = x * x;
-        ((1.0 + r[0]) + r[1] * x2 + r[2] * x2 * x2) * x - target
+        (k0 + r[1] * x2 + r[2] * x2 * x2) * x - target
     };
     let df = |x: f64| {
         let x2 = x * x;
-        (1.0 + r[0]) + 3.0 * r[1] * x2 + 5.0 * r[2] * x2 * x2
+        k0 + 3.0 * r[1] * x2 + 5.0 * r[2] * x2 * x2
     };
     if target <= 0.0 {
         return Some(0.0);
     }
-    // Bracket the first root: f(0) = -target < 0; grow `hi` until f(hi) >= 0, stopping early if
-    // the polynomial turns over (its derivative goes negative) before reaching the target.
-    let (mut lo, mut hi) = (0.0, target.max(1e-3));
-    let mut tries = 0;
-    while f(hi) < 0.0 {
-        if tries > 60 {
+    if k0 <= 0.0 {
+        return None;
+    }
+    let (mut lo, mut hi) = (0.0, f64::INFINITY);
+    if let Some(u) = smallest_positive_root(5.0 * r[2], 3.0 * r[1], k0) {
+        hi = u.sqrt();
+        if f(hi) < 0.0 {
             return None;
         }
-        if df(hi) <= 0.0 {
-            // The polynomial turned over between lo (rising) and hi: find its maximum by
-            // bisection on the derivative; the root exists only if the maximum reaches it.
-            let (mut rising, mut falling) = (lo, hi);
-            for _ in 0..200 {
-                let mid = 0.5 * (rising + falling);
-                if df(mid) > 0.0 { rising = mid } else { falling = mid }
-            }
-            if f(rising) < 0.0 {
-                return None;
-            }
-            hi = rising;
-            break;
-        }
-        lo = hi;
-        hi *= 2.0;
-        tries += 1;
     }
-    let mut x = (target / (1.0 + r[0])).clamp(lo, hi);
+    let mut x = (target / k0).min(hi);
     for _ in 0..100 {
         let fx = f(x);
         if fx == 0.0 {
@@ -148,17 +135,30 @@ pub(crate) fn invert_radial(r: &Vector3<f64>, target: f64) -> Option<f64> {
         } else {
             hi = x;
         }
-        let d = df(x);
-        let mut next = x - fx / d;
-        if !(d > 0.0 && next > lo && next < hi) {
+        let mut next = x - fx / df(x);
+        if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);
         }
-        if (next - x).abs() <= 1e-16 * (1.0 + x) {
+        if (next - x).abs() <= 1e-14 * (1.0 + x) {
             return Some(next);
         }
         x = next;
     }
     Some(x)
+}
+
+/// The smallest positive root of a u^2 + b u + c with c > 0, if any.
+fn smallest_positive_root(a: f64, b: f64, c: f64) -> Option<f64> {
+    if a == 0.0 {
+        return (b < 0.0).then(|| -c / b);
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -0.5 * (b + b.signum() * disc.sqrt());
+    let roots = [q / a, if q != 0.0 { c / q } else { f64::NAN }];
+    roots.into_iter().filter(|u| *u > 0.0).min_by(|x, y| x.total_cmp(y))
 }
 
 /// The CAHV ray direction of a pixel (not normalised), oriented along +A.

@@ -165,7 +165,7 @@ impl Cahvore {
             }
             let step = (zeta * s - lambda * c - (theta - s) * self.pupil_poly(theta).0) / upsilon;
             theta -= step;
-            if step.abs() <= 1e-15 * (1.0 + theta.abs()) {
+            if step.abs() <= 1e-14 * (1.0 + theta.abs()) {
                 return (theta.is_finite() && theta >= 0.0).then(|| (theta, derivative(theta)));
             }
         }

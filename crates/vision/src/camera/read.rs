@@ -9,7 +9,8 @@
 //! Mars 2020 raw-image JSON (one image record of the public raw-images API): the model is the
 //! string `camera.camera_model_component_list` = "(c1,c2,c3);(a1,a2,a3);(h..);(v..);(o..);
 //! (r..);(e..);type;parameter" (as many groups as the model has), its type
-//! `camera.camera_model_type`, and the image size `extended.dimension` = "(width,height)". The
+//! `camera.camera_model_type` (both also accepted at the top level of the record, as older API
+//! records have them), and the image size `extended.dimension` = "(width,height)". The
 //! API's models are already expressed for the returned image (their image centre lies at the
 //! middle of `dimension`), so no subframe or downsampling correction is applied.
 //!
@@ -191,8 +192,13 @@ pub fn from_m2020_json(record: &Value, origin: &str) -> Result<AnyCamera, Camera
     };
     let list_field = "camera.camera_model_component_list";
     let type_field = "camera.camera_model_type";
-    let list = text(&["camera", "camera_model_component_list"])?;
-    let type_name = text(&["camera", "camera_model_type"])?;
+    // Records of the older API flatten the camera fields to the top level.
+    let camera_text = |key: &str| match text(&["camera", key]) {
+        Err(e @ CameraReadError::Missing { .. }) => text(&[key]).map_err(|_| e),
+        other => other,
+    };
+    let list = camera_text("camera_model_component_list")?;
+    let type_name = camera_text("camera_model_type")?;
     let dimension = text(&["extended", "dimension"])?;
     let dims = parse_tuple(dimension)
         .filter(|d| d.len() == 2 && d.iter().all(|x| *x >= 1.0 && x.fract() == 0.0 && *x < 1e6));
