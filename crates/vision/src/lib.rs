@@ -10,5 +10,6 @@ pub mod camera;
 pub mod codec;
 pub mod image;
 pub mod rectify;
+pub mod stereo;
 
 pub use camera::{CameraModel, Cahv, Ray};

@@ -1,0 +1,101 @@
+//! The census transform and the matching cost volume.
+//!
+//! The census transform (Zabih and Woodfill, "Non-parametric local transforms for computing
+//! visual correspondence", ECCV 1994) encodes each pixel by which of its neighbours in a window
+//! are darker than it; the matching cost of two pixels is the Hamming distance of their codes.
+//! It depends only on the order of intensities, so a gain or offset between the two cameras
+//! does not change it. The window here is 9 wide by 7 high (62 bits, one `u64`), the size
+//! Hirschmüller and Scharstein (PAMI 31(9), 2009) evaluated for SGM.
+
+use rayon::prelude::*;
+
+use crate::image::Grey16;
+
+/// Half-width of the census window (9 columns).
+pub const HALF_W: usize = 4;
+/// Half-height of the census window (7 rows).
+pub const HALF_H: usize = 3;
+/// The largest census cost: the number of neighbours compared.
+pub const MAX_COST: u8 = ((2 * HALF_W + 1) * (2 * HALF_H + 1) - 1) as u8;
+
+/// Both images as `f32` on a common 0..255 scale (the brighter image's maximum maps to 255),
+/// so intensity thresholds mean the same for 8-, 12- and 16-bit data.
+pub fn normalise_pair(left: &Grey16, right: &Grey16) -> (Vec<f32>, Vec<f32>) {
+    let max = left.as_raw().iter().chain(right.as_raw()).copied().max().unwrap_or(0).max(1);
+    let scale = 255.0 / f32::from(max);
+    let conv = |img: &Grey16| img.as_raw().iter().map(|&v| f32::from(v) * scale).collect();
+    (conv(left), conv(right))
+}
+
+/// The census code of every pixel (row-major); the window is clamped at the image borders.
+pub fn census(img: &[f32], w: usize, h: usize) -> Vec<u64> {
+    let mut out = vec![0u64; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let rows: Vec<&[f32]> = (0..=2 * HALF_H)
+            .map(|k| {
+                let yy = (y + k).saturating_sub(HALF_H).min(h - 1);
+                &img[yy * w..(yy + 1) * w]
+            })
+            .collect();
+        for (x, code) in row.iter_mut().enumerate() {
+            let centre = img[y * w + x];
+            let mut c = 0u64;
+            for (k, r) in rows.iter().enumerate() {
+                for j in 0..=2 * HALF_W {
+                    if k == HALF_H && j == HALF_W {
+                        continue;
+                    }
+                    let xx = (x + j).saturating_sub(HALF_W).min(w - 1);
+                    c = (c << 1) | u64::from(r[xx] < centre);
+                }
+            }
+            *code = c;
+        }
+    });
+    out
+}
+
+/// The cost volume `C[(y * w + x) * nd + d]`: the Hamming distance between the census codes of
+/// left pixel (x, y) and right pixel (x - d, y); [`MAX_COST`] where x - d leaves the image.
+pub fn cost_volume(left: &[f32], right: &[f32], w: usize, h: usize, nd: usize) -> Vec<u8> {
+    let (cl, cr) = rayon::join(|| census(left, w, h), || census(right, w, h));
+    let mut costs = vec![MAX_COST; w * h * nd];
+    costs.par_chunks_mut(w * nd).enumerate().for_each(|(y, row)| {
+        let (l, r) = (&cl[y * w..(y + 1) * w], &cr[y * w..(y + 1) * w]);
+        for (x, cell) in row.chunks_exact_mut(nd).enumerate() {
+            for (d, c) in cell.iter_mut().enumerate().take(x + 1) {
+                *c = (l[x] ^ r[x - d]).count_ones() as u8;
+            }
+        }
+    });
+    costs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn census_is_invariant_to_gain_and_offset() {
+        let (w, h) = (20, 12);
+        let img: Vec<f32> = (0..w * h).map(|i| ((i * 7919) % 97) as f32).collect();
+        let brighter: Vec<f32> = img.iter().map(|v| 3.0 * v + 11.0).collect();
+        assert_eq!(census(&img, w, h), census(&brighter, w, h));
+    }
+
+    #[test]
+    fn the_true_shift_has_zero_cost() {
+        // Right image = left image shifted by 5 pixels: C(x, 5) = 0 wherever the windows agree.
+        let (w, h, shift) = (40, 10, 5);
+        let left: Vec<f32> = (0..w * h).map(|i| ((i * 2654435761usize) % 251) as f32).collect();
+        let right: Vec<f32> = (0..w * h).map(|i| left[(i / w) * w + ((i % w) + shift).min(w - 1)]).collect();
+        let costs = cost_volume(&left, &right, w, h, 8);
+        for y in 0..h {
+            for x in shift + HALF_W..w - HALF_W - shift {
+                let cell = &costs[(y * w + x) * 8..(y * w + x + 1) * 8];
+                assert_eq!(cell[shift], 0, "({x},{y})");
+                assert!(cell.iter().enumerate().all(|(d, &c)| d == shift || c > 0), "({x},{y}) {cell:?}");
+            }
+        }
+    }
+}
