@@ -10,6 +10,7 @@ mod interactive;
 mod output;
 mod render_cmd;
 mod replay;
+mod stereo_cmd;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -47,6 +48,8 @@ enum Command {
     Rover(distributed::RoverArgs),
     /// Send one operator command to a running `rovernav rover` over zenoh (feature `zenoh`).
     Send(distributed::SendArgs),
+    /// Correlate a rectified stereo pair of image files; score it against a true disparity.
+    Stereo(stereo_cmd::StereoArgs),
     /// Write what one of the rover's cameras sees of the mission's world (DIR/NAME.png).
     Render(render_cmd::RenderArgs),
 }
@@ -169,6 +172,7 @@ fn main() -> ExitCode {
         Some(Command::Sim(args)) => distributed::sim(args),
         Some(Command::Rover(args)) => distributed::rover(args),
         Some(Command::Send(args)) => distributed::send(args),
+        Some(Command::Stereo(args)) => stereo_cmd::run(args),
         Some(Command::Render(args)) => render_cmd::run(args),
     };
     match result {
