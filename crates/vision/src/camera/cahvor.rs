@@ -12,6 +12,9 @@
 //! chi' = (1 + r0) chi + r1 chi^3 + r2 chi^5, so the CAHV ray of the pixel gives chi' and a
 //! Newton iteration (safeguarded by bisection, and limited to the polynomial's first rising
 //! branch) recovers chi to machine precision. JPL's library iterates on the same polynomial.
+//! Departure: where JPL's library reports an error (a pixel whose chi' the polynomial never
+//! reaches, or more than 90 degrees from O) the unprojection returns the linear model's ray,
+//! since the trait's `unproject` cannot fail; such pixels lie outside any calibrated image.
 
 use nalgebra::{Isometry3, Matrix2x3, Matrix3, Point2, Point3, Unit, Vector3};
 

@@ -15,6 +15,8 @@
 //! (lambda / chi) O + (1 + mu) lambda_vec projects through C, A, H, V.
 //!
 //! With type 1 and E = 0 the model is exactly CAHVOR (tested against [`super::Cahvor`]).
+//! As in JPL's library, points whose L theta reaches 90 degrees do not project; pixels outside
+//! the model's valid field unproject along the linear model's ray (see [`super::Cahvor`]).
 
 use nalgebra::{Isometry3, Matrix2x3, Matrix3, Point2, Point3, Unit, Vector3};
 
