@@ -8,10 +8,11 @@
 //! navigation", IEEE J. Robotics and Automation 3(3), 1987; the model JPL's rover stereo
 //! uses), and the range error along the pixel's ray scales with it by range / depth.
 //!
-//! sigma_d is the standard deviation of the subpixel disparity on correctly matched pixels;
-//! [`DEFAULT_SIGMA_D_PX`] is what the matcher achieves on the synthetic textured plane of
-//! this crate's tests (see docs/vision.md for the measurement); Matthies reports 0.1 to 0.3 px
-//! for window correlation on rover imagery.
+//! sigma_d is the standard deviation of the subpixel disparity on correctly matched pixels.
+//! [`DEFAULT_SIGMA_D_PX`] = 0.25 px is conservative: on the synthetic textured ground plane of
+//! this crate's tests (12-bit, 2 DN read noise) the matcher's rms disparity error is 0.10 px;
+//! the margin covers what that scene lacks (shading, shadows, compression, rectification
+//! resampling). Matthies reports 0.1 to 0.3 px for window correlation on rover imagery.
 
 use nalgebra::{Point2, Vector3};
 use rovernav_core::{CameraKind, PointCloud, Wedge};
@@ -113,9 +114,10 @@ impl StereoRig {
     }
 
     /// The valid points within `max_range` (m) as a navigators' point cloud, for cameras whose
-    /// models are expressed in the rover body frame. The wedge's bearing is the pointing axis'
-    /// azimuth, its half angle half the horizontal field of view, its ranges the nearest and
-    /// farthest kept points' planar distances from the body origin.
+    /// models are expressed in the rover body frame. The wedge is the smallest one about the
+    /// pointing axis' azimuth that holds every kept point, seen from the body origin as
+    /// [`Wedge::contains`] tests it (bearing, largest bearing difference, nearest and farthest
+    /// planar distance).
     pub fn point_cloud(&self, range: &RangeImage, camera: CameraKind, max_range: f64) -> PointCloud {
         let points: Vec<[f32; 3]> = range
             .points
@@ -124,16 +126,21 @@ impl StereoRig {
             .filter(|&(_, &r)| r.is_finite() && f64::from(r) <= max_range)
             .map(|(p, _)| *p)
             .collect();
-        let planar = |p: &[f32; 3]| f64::from(p[0]).hypot(f64::from(p[1]));
-        let (min_range, max_kept) =
-            points.iter().map(planar).fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
         let a = self.left.a;
-        let half_angle = (0.5 * self.left.width as f64 / self.left.focal_h()).atan();
+        let bearing = a.y.atan2(a.x);
+        let (mut min_range, mut max_kept, mut half_angle) = (f64::INFINITY, 0.0f64, 0.0f64);
+        for p in &points {
+            let (x, y) = (f64::from(p[0]), f64::from(p[1]));
+            let r = x.hypot(y);
+            min_range = min_range.min(r);
+            max_kept = max_kept.max(r);
+            half_angle = half_angle.max(rovernav_core::angle_diff(y.atan2(x), bearing).abs());
+        }
         PointCloud {
             camera,
             origin: [self.left.c.x, self.left.c.y, self.left.c.z],
             wedge: Wedge {
-                bearing: a.y.atan2(a.x),
+                bearing,
                 half_angle,
                 min_range: if points.is_empty() { 0.0 } else { min_range },
                 max_range: max_kept,
