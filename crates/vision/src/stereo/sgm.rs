@@ -30,7 +30,7 @@ pub struct Aggregated {
 }
 
 /// Padding value around each path vector: larger than any L, small enough that + P1 fits.
-const SENTINEL: u16 = 0x3fff;
+const SENTINEL: i16 = 0x3fff;
 
 /// Aggregates the cost volume along 8 paths.
 pub fn aggregate(
@@ -49,35 +49,35 @@ pub fn aggregate(
 }
 
 /// P2 after adaptation to the intensity step between a pixel and its predecessor on a path.
-fn adapted_p2(params: &StereoParams, a: f32, b: f32) -> u16 {
+fn adapted_p2(params: &StereoParams, a: f32, b: f32) -> i16 {
     let g = params.p2_gradient_scale;
     let p2 = f32::from(params.p2) * g / (g + (a - b).abs());
-    (p2 as u16).max(params.p1)
+    (p2 as i16).max(params.p1 as i16)
 }
 
 /// One step of equation 13: `out` (padded, nd + 2 entries) from the predecessor's padded
-/// vector `prev` and its minimum. Returns the minimum of the new vector.
+/// vector `prev` and its minimum. Returns the minimum of the new vector. The path costs are
+/// `i16` (they stay below 0x3fff + P1) because SSE2 has a packed minimum for signed 16-bit
+/// values only, and this loop is the matcher's inner loop.
 #[inline]
-fn step(c: &[u8], prev: &[u16], prev_min: u16, p1: u16, p2: u16, out: &mut [u16]) -> u16 {
+fn step(c: &[u8], prev: &[i16], prev_min: i16, p1: i16, p2: i16, out: &mut [i16]) -> i16 {
     let nd = c.len();
-    let (prev, out) = (&prev[..nd + 2], &mut out[..nd + 2]);
     let jump = prev_min + p2;
-    let mut m = u16::MAX;
-    for d in 0..nd {
-        let best = prev[d + 1].min(prev[d] + p1).min(prev[d + 2] + p1).min(jump);
-        let v = u16::from(c[d]) + best - prev_min;
-        out[d + 1] = v;
-        m = m.min(v);
+    let (lower, same, upper) = (&prev[..nd], &prev[1..nd + 1], &prev[2..nd + 2]);
+    let out = &mut out[1..nd + 1];
+    for ((((o, &c), &a), &b), &e) in out.iter_mut().zip(c).zip(lower).zip(same).zip(upper) {
+        let best = b.min(a + p1).min(e + p1).min(jump);
+        *o = i16::from(c) + best - prev_min;
     }
-    m
+    out.iter().copied().fold(i16::MAX, i16::min)
 }
 
 /// A path's first pixel: L = C.
 #[inline]
-fn start(c: &[u8], out: &mut [u16]) -> u16 {
-    let mut m = u16::MAX;
+fn start(c: &[u8], out: &mut [i16]) -> i16 {
+    let mut m = i16::MAX;
     for (o, &v) in out[1..=c.len()].iter_mut().zip(c) {
-        *o = u16::from(v);
+        *o = i16::from(v);
         m = m.min(*o);
     }
     m
@@ -94,13 +94,13 @@ fn sweep(
     reverse: bool,
 ) -> Vec<u16> {
     let stride = nd + 2;
-    let (p1, p1s) = (params.p1, params.p1);
+    let p1 = params.p1 as i16;
     let new_row = || vec![SENTINEL; w * stride];
     // Previous and current rows for the 3 paths from the row above: diagonal from the
     // preceding column, vertical, diagonal from the following column (in sweep order).
-    let mut prev: [Vec<u16>; 3] = [new_row(), new_row(), new_row()];
-    let mut cur: [Vec<u16>; 3] = [new_row(), new_row(), new_row()];
-    let mut prev_min = [vec![0u16; w], vec![0u16; w], vec![0u16; w]];
+    let mut prev: [Vec<i16>; 3] = [new_row(), new_row(), new_row()];
+    let mut cur: [Vec<i16>; 3] = [new_row(), new_row(), new_row()];
+    let mut prev_min = [vec![0i16; w], vec![0i16; w], vec![0i16; w]];
     let mut cur_min = prev_min.clone();
     let mut along = vec![SENTINEL; stride];
     let mut along_next = vec![SENTINEL; stride];
@@ -108,7 +108,7 @@ fn sweep(
     let real = |i: usize, n: usize| if reverse { n - 1 - i } else { i };
     for yi in 0..h {
         let y = real(yi, h);
-        let mut along_min = 0u16;
+        let mut along_min = 0i16;
         for xi in 0..w {
             let x = real(xi, w);
             let p = y * w + x;
@@ -132,13 +132,15 @@ fn sweep(
                     let pred = pred as usize;
                     let q = img[real(yi - 1, h) * w + real(pred, w)];
                     let pv = &prev[k][pred * stride..(pred + 1) * stride];
-                    step(c, pv, prev_min[k][pred], p1s, adapted_p2(params, i, q), o)
+                    step(c, pv, prev_min[k][pred], p1, adapted_p2(params, i, q), o)
                 };
             }
             let s = &mut out[p * nd..(p + 1) * nd];
-            let (a, b, cc) = (&cur[0][xi * stride..], &cur[1][xi * stride..], &cur[2][xi * stride..]);
-            for d in 0..nd {
-                s[d] = along[d + 1] + a[d + 1] + b[d + 1] + cc[d + 1];
+            let r = xi * stride + 1..xi * stride + 1 + nd;
+            let (a, b, cc) = (&cur[0][r.clone()], &cur[1][r.clone()], &cur[2][r]);
+            for ((((s, &l), &a), &b), &cc) in s.iter_mut().zip(&along[1..nd + 1]).zip(a).zip(b).zip(cc) {
+                // Each term is below 62 + 1000 (P2 <= 1000), so the sum fits.
+                *s = (l + a + b + cc) as u16;
             }
         }
         std::mem::swap(&mut prev, &mut cur);
@@ -230,16 +232,16 @@ mod tests {
     use super::*;
 
     /// Equation 13 evaluated literally along one path, for comparison.
-    fn reference_path(costs: &[Vec<u8>], p1: u16, p2: u16) -> Vec<Vec<u16>> {
-        let mut out: Vec<Vec<u16>> = Vec::new();
+    fn reference_path(costs: &[Vec<u8>], p1: i16, p2: i16) -> Vec<Vec<i16>> {
+        let mut out: Vec<Vec<i16>> = Vec::new();
         for (i, c) in costs.iter().enumerate() {
             if i == 0 {
-                out.push(c.iter().map(|&v| u16::from(v)).collect());
+                out.push(c.iter().map(|&v| i16::from(v)).collect());
                 continue;
             }
             let prev = &out[i - 1];
             let m = *prev.iter().min().unwrap();
-            let l: Vec<u16> = (0..c.len())
+            let l: Vec<i16> = (0..c.len())
                 .map(|d| {
                     let mut best = prev[d].min(m + p2);
                     if d > 0 {
@@ -248,7 +250,7 @@ mod tests {
                     if d + 1 < c.len() {
                         best = best.min(prev[d + 1] + p1);
                     }
-                    u16::from(c[d]) + best - m
+                    i16::from(c[d]) + best - m
                 })
                 .collect();
             out.push(l);
