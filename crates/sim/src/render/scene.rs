@@ -55,6 +55,7 @@ pub struct Scene<'a> {
     pub lighting: Lighting,
     rocks: RockIndex,
     far_z: f64,
+    top_z: f64,
 }
 
 /// The result of tracing one ray: radiance factor, range and label.
@@ -74,6 +75,7 @@ impl<'a> Scene<'a> {
         let h = &terrain.dem.heights.data;
         let finite: Vec<f64> = h.iter().filter(|v| v.is_finite()).map(|&v| v as f64).collect();
         let far_z = if finite.is_empty() { 0.0 } else { finite.iter().sum::<f64>() / finite.len() as f64 };
+        let top_z = finite.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
         Self {
             terrain,
             field,
@@ -83,6 +85,7 @@ impl<'a> Scene<'a> {
             lighting: Lighting::new(sun, atmosphere),
             rocks: RockIndex::new(terrain),
             far_z,
+            top_z,
         }
     }
 
@@ -95,7 +98,7 @@ impl<'a> Scene<'a> {
     /// Traces one ray; `pixel_angle` (rad) sets the texture's band limit.
     pub fn trace(&self, origin: [f64; 3], dir: [f64; 3], pixel_angle: f64, shadows: bool) -> Sample {
         let dem = &self.terrain.dem;
-        let terrain = self.field.cast(dem, origin, dir, 1e5);
+        let terrain = self.field.cast(dem, origin, dir, self.reach(origin, dir, 1e5));
         let t_terrain = terrain.map_or(f64::INFINITY, |h| h.range);
         let body = self.rover.as_ref().and_then(|b| b.intersect(origin, dir, t_terrain));
         let lit = &self.lighting;
@@ -140,8 +143,14 @@ impl<'a> Scene<'a> {
         }
         // Start a little off the surface so the ray does not find its own start.
         let o = [p[0] + n[0] * 2e-3, p[1] + n[1] * 2e-3, p[2] + n[2] * 2e-3];
-        self.field.cast(&self.terrain.dem, o, s, 1e4).is_some()
+        self.field.cast(&self.terrain.dem, o, s, self.reach(o, s, 1e4)).is_some()
             || self.rover.as_ref().is_some_and(|b| b.intersect(o, s, f64::INFINITY).is_some())
+    }
+
+    /// How far along a ray the terrain can still be met: a rising ray is above every cell
+    /// once it passes the DEM's highest point.
+    fn reach(&self, o: [f64; 3], d: [f64; 3], limit: f64) -> f64 {
+        if d[2] > 0.0 { ((self.top_z - o[2]) / d[2]).clamp(0.0, limit) } else { limit }
     }
 
     /// The distance to the level ground beyond the DEM, if the ray meets it before the horizon.

@@ -89,21 +89,30 @@ impl Lighting {
     /// Sky radiance factor along the unit direction `dir`.
     pub fn sky(&self, dir: [f64; 3]) -> f64 {
         let el = dir[2].clamp(0.0, 1.0).asin();
-        let cos_g = dir[0] * self.sun[0] + dir[1] * self.sun[1] + dir[2] * self.sun[2];
+        self.sky_at(el, dir[0] * self.sun[0] + dir[1] * self.sun[1] + dir[2] * self.sun[2])
+    }
+
+    /// A surface radiance `l` seen at distance `d` along `dir`, through the dust.
+    pub fn aerial(&self, l: f64, d: f64, dir: [f64; 3]) -> f64 {
+        let t = (-self.atmosphere.tau * d / self.atmosphere.scale_height_m).exp();
+        if t >= 1.0 {
+            return l;
+        }
+        // The sky at the horizon in the ray's azimuth (elevation 0 in `sky`).
+        let n = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt().max(1e-9);
+        let cos_g = (dir[0] * self.sun[0] + dir[1] * self.sun[1]) / n;
+        let horizon = self.sky_at(0.0, cos_g);
+        l * t + horizon * (1.0 - t)
+    }
+
+    /// Sky radiance factor at elevation `el` (rad) and cosine `cos_g` of the angle to the sun.
+    fn sky_at(&self, el: f64, cos_g: f64) -> f64 {
         let gamma = cos_g.clamp(-1.0, 1.0).acos();
         let brightness = if self.sun[2] > -0.1 { 1.0 } else { 0.01 };
         0.45 * brightness
             * (1.0 - (-self.atmosphere.tau).exp())
             * (0.3 + 0.7 * (-el / 0.3).exp())
             * (1.0 + 2.0 * (-gamma / 0.2).exp())
-    }
-
-    /// A surface radiance `l` seen at distance `d` along `dir`, through the dust.
-    pub fn aerial(&self, l: f64, d: f64, dir: [f64; 3]) -> f64 {
-        let t = (-self.atmosphere.tau * d / self.atmosphere.scale_height_m).exp();
-        let horizon = [dir[0], dir[1], 0.0];
-        let n = (horizon[0] * horizon[0] + horizon[1] * horizon[1]).sqrt().max(1e-9);
-        l * t + self.sky([horizon[0] / n, horizon[1] / n, 0.0]) * (1.0 - t)
     }
 }
 
@@ -126,43 +135,89 @@ pub fn rock_albedo(rock: &Rock, index: usize, x: f64, y: f64, footprint: f64) ->
     ROCK_ALBEDO * own * (1.0 + 0.35 * fractal(x - rock.x, y - rock.y, footprint, 1 + index as u64 % 1024))
 }
 
-/// Slope (dz/dx, dz/dy) of the millimetre-scale roughness of rock `index` at (x, y): bumps a
-/// few millimetres high that the 5 cm DEM cannot hold, band-limited like the albedo.
+/// Slope (dz/dx, dz/dy) of the millimetre-scale roughness of rock `index` at (x, y): bumps
+/// that the 5 cm DEM cannot hold (wavelengths 4 to 64 mm, self-similar: the same slope at
+/// every scale), band-limited like the albedo.
 pub fn rock_roughness(index: usize, x: f64, y: f64, footprint: f64) -> (f64, f64) {
-    const AMPLITUDE_M: f64 = 0.006;
-    let e = footprint.max(0.003);
+    const SLOPE_PER_OCTAVE: f64 = 0.12;
     let salt = 2048 + index as u64 % 1024;
-    let f = |u: f64, v: f64| AMPLITUDE_M * fractal(u, v, footprint, salt);
-    ((f(x + e, y) - f(x - e, y)) / (2.0 * e), (f(x, y + e) - f(x, y - e)) / (2.0 * e))
+    let (mut gx, mut gy) = (0.0, 0.0);
+    let mut lambda = WAVELENGTH_MIN;
+    for k in 0..5 {
+        let w = (lambda / footprint.max(1e-9) - 1.0).clamp(0.0, 1.0);
+        if w > 0.0 {
+            // Height SLOPE * lambda * n(x / lambda): its gradient is SLOPE * grad n.
+            let (_, du, dv) = value_noise_grad(x / lambda, y / lambda, salt.wrapping_mul(31).wrapping_add(k));
+            gx += SLOPE_PER_OCTAVE * w * du;
+            gy += SLOPE_PER_OCTAVE * w * dv;
+        }
+        lambda *= 2.0;
+    }
+    (gx, gy)
 }
+
+/// Per-octave amplitudes of [`fractal`] and their sum.
+static AMPLITUDES: std::sync::LazyLock<([f64; OCTAVES], f64)> = std::sync::LazyLock::new(|| {
+    let mut a = [0.0; OCTAVES];
+    for (k, v) in a.iter_mut().enumerate() {
+        // Amplitude grows slowly with wavelength: fine grain as visible as large patches.
+        *v = (WAVELENGTH_MIN * 2f64.powi(k as i32)).powf(0.15);
+    }
+    (a, a.iter().sum())
+});
 
 /// Band-limited fractal noise in about [-1, 1], zero mean.
 fn fractal(x: f64, y: f64, footprint: f64, salt: u64) -> f64 {
-    let (mut sum, mut norm) = (0.0, 0.0);
+    let (amps, norm) = &*AMPLITUDES;
+    let mut sum = 0.0;
     let mut lambda = WAVELENGTH_MIN;
-    for k in 0..OCTAVES {
-        // Amplitude grows slowly with wavelength: fine grain as visible as large patches.
-        let amp = lambda.powf(0.15);
-        norm += amp;
+    for (k, amp) in amps.iter().enumerate() {
         let w = (lambda / footprint.max(1e-9) - 1.0).clamp(0.0, 1.0);
         if w > 0.0 {
-            sum +=
-                amp * w * value_noise(x / lambda, y / lambda, salt.wrapping_mul(31).wrapping_add(k as u64));
+            let (n, _, _) =
+                value_noise_grad(x / lambda, y / lambda, salt.wrapping_mul(31).wrapping_add(k as u64));
+            sum += amp * w * n;
         }
         lambda *= 2.0;
     }
     1.6 * sum / norm
 }
 
-/// Smoothly interpolated lattice noise in [-1, 1].
-fn value_noise(u: f64, v: f64, salt: u64) -> f64 {
+/// Lattice size of the noise tables (the finest octave repeats every 4096 wavelengths: 16 m).
+const LATTICE: usize = 4096;
+
+/// A permutation of the lattice indices and a random value in [-1, 1] per index (Perlin's
+/// table-driven lattice: two look-ups per corner instead of a 64-bit hash).
+static TABLES: std::sync::LazyLock<(Vec<u16>, Vec<f32>)> = std::sync::LazyLock::new(|| {
+    let mut perm: Vec<u16> = (0..LATTICE as u16).collect();
+    let mut values = Vec::with_capacity(LATTICE);
+    for i in 0..LATTICE {
+        perm.swap(i, i + (unit_hash(i as i64, 1, 5) * (LATTICE - i) as f64) as usize);
+        values.push((2.0 * unit_hash(i as i64, 2, 5) - 1.0) as f32);
+    }
+    (perm, values)
+});
+
+/// Smoothly interpolated lattice noise in [-1, 1] and its gradient (d/du, d/dv).
+fn value_noise_grad(u: f64, v: f64, salt: u64) -> (f64, f64, f64) {
+    let (perm, values) = &*TABLES;
     let (fu, fv) = (u.floor(), v.floor());
-    let (iu, iv) = (fu as i64, fv as i64);
-    let (su, sv) = (smooth(u - fu), smooth(v - fv));
-    let h = |a: i64, b: i64| 2.0 * unit_hash(a, b, salt) - 1.0;
-    let top = h(iu, iv) + (h(iu + 1, iv) - h(iu, iv)) * su;
-    let bottom = h(iu, iv + 1) + (h(iu + 1, iv + 1) - h(iu, iv + 1)) * su;
-    top + (bottom - top) * sv
+    let mask = LATTICE as i64 - 1;
+    // Each salt shifts the lattice, so octaves and rocks do not share a pattern.
+    let (iu, iv) = (fu as i64 + (salt as i64 * 1327), fv as i64 + (salt as i64 * 2131));
+    let (tu, tv) = (u - fu, v - fv);
+    let (su, sv) = (smooth(tu), smooth(tv));
+    let (dsu, dsv) = (6.0 * tu * (1.0 - tu), 6.0 * tv * (1.0 - tv));
+    let col = |a: i64| perm[(a & mask) as usize] as i64;
+    let (c0, c1) = (col(iu), col(iu + 1));
+    let h = |c: i64, b: i64| values[perm[((c + b) & mask) as usize] as usize] as f64;
+    let (h00, h10, h01, h11) = (h(c0, iv), h(c1, iv), h(c0, iv + 1), h(c1, iv + 1));
+    let top = h00 + (h10 - h00) * su;
+    let bottom = h01 + (h11 - h01) * su;
+    let value = top + (bottom - top) * sv;
+    let du = ((h10 - h00) + (h11 - h01 - h10 + h00) * sv) * dsu;
+    let dv = (bottom - top) * dsv;
+    (value, du, dv)
 }
 
 fn smooth(t: f64) -> f64 {
@@ -185,6 +240,17 @@ fn unit_hash(a: i64, b: i64, salt: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn noise_gradient_matches_finite_differences() {
+        for &(u, v) in &[(0.3, 0.7), (12.9, -3.2), (-7.45, 100.01)] {
+            let (_, du, dv) = value_noise_grad(u, v, 9);
+            let e = 1e-6;
+            let fd_u = (value_noise_grad(u + e, v, 9).0 - value_noise_grad(u - e, v, 9).0) / (2.0 * e);
+            let fd_v = (value_noise_grad(u, v + e, 9).0 - value_noise_grad(u, v - e, 9).0) / (2.0 * e);
+            assert!((du - fd_u).abs() < 1e-6 && (dv - fd_v).abs() < 1e-6, "{du} {fd_u} {dv} {fd_v}");
+        }
+    }
 
     #[test]
     fn band_limiting_keeps_the_mean_and_removes_fine_detail() {
