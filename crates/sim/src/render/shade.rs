@@ -201,7 +201,7 @@ static TABLES: std::sync::LazyLock<(Vec<u16>, Vec<f32>)> = std::sync::LazyLock::
 /// Smoothly interpolated lattice noise in [-1, 1] and its gradient (d/du, d/dv).
 fn value_noise_grad(u: f64, v: f64, salt: u64) -> (f64, f64, f64) {
     let (perm, values) = &*TABLES;
-    let (fu, fv) = (u.floor(), v.floor());
+    let (fu, fv) = (fast_floor(u), fast_floor(v));
     let mask = LATTICE as i64 - 1;
     // Each salt shifts the lattice, so octaves and rocks do not share a pattern.
     let (iu, iv) = (fu as i64 + (salt as i64 * 1327), fv as i64 + (salt as i64 * 2131));
@@ -218,6 +218,12 @@ fn value_noise_grad(u: f64, v: f64, salt: u64) -> (f64, f64, f64) {
     let du = ((h10 - h00) + (h11 - h01 - h10 + h00) * sv) * dsu;
     let dv = (bottom - top) * dsv;
     (value, du, dv)
+}
+
+/// `floor` without the libm call (the baseline x86-64 target has no rounding instruction).
+fn fast_floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x { t - 1.0 } else { t }
 }
 
 fn smooth(t: f64) -> f64 {

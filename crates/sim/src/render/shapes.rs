@@ -56,6 +56,8 @@ pub struct SolidHit {
 #[derive(Clone, Debug)]
 pub struct RoverBody {
     primitives: Vec<Primitive>,
+    /// Groups of primitives with their body-frame bounding box (min, max).
+    groups: Vec<(([f64; 3], [f64; 3]), std::ops::Range<usize>)>,
     to_world: Isometry3<f64>,
     to_body: Isometry3<f64>,
     /// Bounding sphere (body frame centre, radius) for culling.
@@ -73,6 +75,8 @@ impl RoverBody {
         let mast_base = deck_top;
         let head_z = rover.mast_height;
         let wheel_x = (0.5 * l - WHEEL_RADIUS).max(0.0);
+        // Chassis first (body, deck, wheels), then the mast group: each group has a bounding
+        // box, so rays from the mast head skip the chassis test unless they look at it.
         let mut primitives = vec![
             // Warm electronics box: light, dusty paint.
             Primitive::Box {
@@ -88,14 +92,6 @@ impl RoverBody {
                 yaw: 0.0,
                 albedo: 0.12,
             },
-            Primitive::Cylinder {
-                centre: [0.0, 0.0, 0.5 * (mast_base + head_z - 0.06)],
-                axis: [0.0, 0.0, 1.0],
-                radius: 0.025,
-                half_length: 0.5 * (head_z - 0.06 - mast_base).max(0.01),
-                albedo: 0.55,
-            },
-            Primitive::Box { centre: [0.0, 0.0, head_z], half: [0.05, 0.16, 0.05], yaw: pan, albedo: 0.5 },
         ];
         for x in [wheel_x, 0.0, -wheel_x] {
             for y in [0.5 * rover.track, -0.5 * rover.track] {
@@ -108,10 +104,31 @@ impl RoverBody {
                 });
             }
         }
+        let chassis = primitives.len();
+        primitives.extend([
+            Primitive::Cylinder {
+                centre: [0.0, 0.0, 0.5 * (mast_base + head_z - 0.06)],
+                axis: [0.0, 0.0, 1.0],
+                radius: 0.025,
+                half_length: 0.5 * (head_z - 0.06 - mast_base).max(0.01),
+                albedo: 0.55,
+            },
+            Primitive::Box { centre: [0.0, 0.0, head_z], half: [0.05, 0.16, 0.05], yaw: pan, albedo: 0.5 },
+        ]);
+        let groups = vec![
+            (bounds(&primitives[..chassis]), 0..chassis),
+            (bounds(&primitives[chassis..]), chassis..primitives.len()),
+        ];
         let to_world = pose_isometry(pose);
         let bound_centre = [0.0, 0.0, 0.5 * head_z];
         let bound_radius = (0.5 * l + 0.05).hypot(0.5 * w + 0.05).hypot(0.5 * head_z + 0.1);
-        Self { primitives, to_world, to_body: to_world.inverse(), bound: (bound_centre, bound_radius) }
+        Self {
+            primitives,
+            groups,
+            to_world,
+            to_body: to_world.inverse(),
+            bound: (bound_centre, bound_radius),
+        }
     }
 
     /// The primitives in the body frame.
@@ -129,7 +146,8 @@ impl RoverBody {
             return None;
         }
         let mut best: Option<(f64, Vector3<f64>, f64)> = None;
-        for p in &self.primitives {
+        let groups = self.groups.iter().filter(|(b, _)| slab(&o.coords, &d, b, t_max));
+        for p in groups.flat_map(|(_, range)| &self.primitives[range.clone()]) {
             let limit = best.map_or(t_max, |b| b.0);
             if let Some((t, n)) = intersect_primitive(p, &o.coords, &d, limit) {
                 let albedo = match p {
@@ -145,6 +163,44 @@ impl RoverBody {
     }
 }
 
+/// Whether a ray meets an axis-aligned box (min, max) for some `t` in `[0, limit)`.
+fn slab(o: &Vector3<f64>, d: &Vector3<f64>, b: &([f64; 3], [f64; 3]), limit: f64) -> bool {
+    let (mut t0, mut t1) = (0.0f64, limit);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if o[k] < b.0[k] || o[k] > b.1[k] {
+                return false;
+            }
+            continue;
+        }
+        let (a, c) = ((b.0[k] - o[k]) / d[k], (b.1[k] - o[k]) / d[k]);
+        t0 = t0.max(a.min(c));
+        t1 = t1.min(a.max(c));
+    }
+    t0 <= t1
+}
+
+/// A body-frame box (min, max) enclosing primitives.
+fn bounds(primitives: &[Primitive]) -> ([f64; 3], [f64; 3]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in primitives {
+        let (centre, extent) = match p {
+            Primitive::Box { centre, half, yaw, .. } => {
+                let (s, c) = (yaw.sin().abs(), yaw.cos().abs());
+                (centre, [c * half[0] + s * half[1], s * half[0] + c * half[1], half[2]])
+            }
+            Primitive::Cylinder { centre, axis, radius, half_length, .. } => {
+                (centre, [0, 1, 2].map(|k| radius + half_length * axis[k].abs()))
+            }
+        };
+        for k in 0..3 {
+            lo[k] = lo[k].min(centre[k] - extent[k]);
+            hi[k] = hi[k].max(centre[k] + extent[k]);
+        }
+    }
+    (lo, hi)
+}
+
 /// Intersection of a body-frame ray with one primitive in `(EPS, limit)`: distance and outward
 /// normal (body frame). A ray starting inside the primitive misses it.
 fn intersect_primitive(
@@ -155,7 +211,7 @@ fn intersect_primitive(
 ) -> Option<(f64, Vector3<f64>)> {
     match p {
         Primitive::Box { centre, half, yaw, .. } => {
-            let (s, c) = yaw.sin_cos();
+            let (s, c) = if *yaw == 0.0 { (0.0, 1.0) } else { yaw.sin_cos() };
             let rel = o - Vector3::from(*centre);
             // Into the box's own axes (rotation by -yaw).
             let lo = Vector3::new(c * rel.x + s * rel.y, -s * rel.x + c * rel.y, rel.z);
@@ -305,5 +361,43 @@ impl Volume {
         };
         let t0 = t0.max(0.0);
         (t1 > t0).then_some((t0, t1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn culled_intersection_equals_testing_every_primitive() {
+        let pose = Pose3 { x: 2.0, y: -1.0, z: 0.3, roll: 0.05, pitch: -0.1, yaw: 0.7 };
+        let body = RoverBody::new(&RoverConfig::default(), &pose, 0.4);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let o = [0, 1, 2].map(|k| [2.0, -1.0, 0.8][k] + rng.random_range(-2.0..2.0));
+            // Aim at a random point of the rover's bounding volume, so most rays come close.
+            let aim = pose.transform([
+                rng.random_range(-0.5..0.5),
+                rng.random_range(-0.4..0.4),
+                rng.random_range(0.0..1.3),
+            ]);
+            let d = (Vector3::from(aim) - Vector3::from(o)).normalize();
+            let got = body.intersect(o, [d.x, d.y, d.z], f64::INFINITY).map(|h| h.t);
+            let (ob, db) = (body.to_body * Point3::from(o), body.to_body.rotation * d);
+            let brute = body
+                .primitives
+                .iter()
+                .filter_map(|p| intersect_primitive(p, &ob.coords, &db, f64::INFINITY).map(|h| h.0))
+                .min_by(f64::total_cmp);
+            assert_eq!(got.is_some(), brute.is_some());
+            if let (Some(a), Some(b)) = (got, brute) {
+                assert!((a - b).abs() < 1e-12);
+                hits += 1;
+            }
+        }
+        assert!(hits > 1500, "{hits}");
     }
 }
