@@ -18,11 +18,26 @@ pub const HALF_H: usize = 3;
 /// The largest census cost: the number of neighbours compared.
 pub const MAX_COST: u8 = ((2 * HALF_W + 1) * (2 * HALF_H + 1) - 1) as u8;
 
-/// Both images as `f32` on a common 0..255 scale (the brighter image's maximum maps to 255),
-/// so intensity thresholds mean the same for 8-, 12- and 16-bit data.
+/// Both images as `f32` on a common scale where the 99.9th percentile of both images' pixels
+/// maps to 255, so intensity thresholds mean the same for 8-, 12- and 16-bit data and a few
+/// hot pixels do not compress the scale (brighter pixels go above 255; the census and the
+/// thresholds need no clamping).
 pub fn normalise_pair(left: &Grey16, right: &Grey16) -> (Vec<f32>, Vec<f32>) {
-    let max = left.as_raw().iter().chain(right.as_raw()).copied().max().unwrap_or(0).max(1);
-    let scale = 255.0 / f32::from(max);
+    let mut histogram = vec![0usize; 1 << 16];
+    for &v in left.as_raw().iter().chain(right.as_raw()) {
+        histogram[usize::from(v)] += 1;
+    }
+    let total: usize = histogram.iter().sum();
+    let mut below = 0usize;
+    let mut high = 1usize;
+    for (v, &n) in histogram.iter().enumerate() {
+        below += n;
+        if below as f64 >= 0.999 * total as f64 {
+            high = v.max(1);
+            break;
+        }
+    }
+    let scale = 255.0 / high as f32;
     let conv = |img: &Grey16| img.as_raw().iter().map(|&v| f32::from(v) * scale).collect();
     (conv(left), conv(right))
 }
@@ -74,6 +89,25 @@ pub fn cost_volume(left: &[f32], right: &[f32], w: usize, h: usize, nd: usize) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hot_pixels_do_not_set_the_scale() {
+        // A 12-bit image up to 1000 DN with 0.05 % of its pixels saturated at 4095.
+        let img = Grey16::from_fn(100, 100, |x, y| {
+            image::Luma([if (x, y) == (3, 4) || (x, y) == (50, 60) {
+                4095
+            } else {
+                ((x * 7 + y * 3) % 1001) as u16
+            }])
+        });
+        let (a, _) = normalise_pair(&img, &img);
+        let p = |x: usize, y: usize| a[y * 100 + x];
+        assert!((p(0, 0) - 0.0).abs() < 1e-6);
+        assert!(p(3, 4) > 1000.0, "the hot pixel stays above the scale");
+        let hot = [4 * 100 + 3, 60 * 100 + 50];
+        let max_normal = (0..100 * 100).filter(|i| !hot.contains(i)).map(|i| a[i]).fold(0.0, f32::max);
+        assert!((250.0..=265.0).contains(&max_normal), "{max_normal}");
+    }
 
     #[test]
     fn census_is_invariant_to_gain_and_offset() {
