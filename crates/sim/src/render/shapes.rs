@@ -57,7 +57,7 @@ pub struct SolidHit {
 pub struct RoverBody {
     primitives: Vec<Primitive>,
     /// Groups of primitives with their body-frame bounding box (min, max).
-    groups: Vec<(([f64; 3], [f64; 3]), std::ops::Range<usize>)>,
+    groups: Vec<(Aabb, std::ops::Range<usize>)>,
     to_world: Isometry3<f64>,
     to_body: Isometry3<f64>,
     /// Bounding sphere (body frame centre, radius) for culling.
@@ -163,8 +163,11 @@ impl RoverBody {
     }
 }
 
+/// An axis-aligned box in the body frame: (min, max) corners.
+type Aabb = ([f64; 3], [f64; 3]);
+
 /// Whether a ray meets an axis-aligned box (min, max) for some `t` in `[0, limit)`.
-fn slab(o: &Vector3<f64>, d: &Vector3<f64>, b: &([f64; 3], [f64; 3]), limit: f64) -> bool {
+fn slab(o: &Vector3<f64>, d: &Vector3<f64>, b: &Aabb, limit: f64) -> bool {
     let (mut t0, mut t1) = (0.0f64, limit);
     for k in 0..3 {
         if d[k] == 0.0 {
@@ -181,7 +184,7 @@ fn slab(o: &Vector3<f64>, d: &Vector3<f64>, b: &([f64; 3], [f64; 3]), limit: f64
 }
 
 /// A body-frame box (min, max) enclosing primitives.
-fn bounds(primitives: &[Primitive]) -> ([f64; 3], [f64; 3]) {
+fn bounds(primitives: &[Primitive]) -> Aabb {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in primitives {
         let (centre, extent) = match p {
