@@ -43,28 +43,27 @@ pub fn normalise_pair(left: &Grey16, right: &Grey16) -> (Vec<f32>, Vec<f32>) {
 }
 
 /// The census code of every pixel (row-major); the window is clamped at the image borders.
+/// Each window row is copied once into a buffer padded by replicating its end pixels, so the
+/// comparisons for one offset run over contiguous slices (a loop the compiler vectorises).
 pub fn census(img: &[f32], w: usize, h: usize) -> Vec<u64> {
     let mut out = vec![0u64; w * h];
-    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let rows: Vec<&[f32]> = (0..=2 * HALF_H)
-            .map(|k| {
-                let yy = (y + k).saturating_sub(HALF_H).min(h - 1);
-                &img[yy * w..(yy + 1) * w]
-            })
-            .collect();
-        for (x, code) in row.iter_mut().enumerate() {
-            let centre = img[y * w + x];
-            let mut c = 0u64;
-            for (k, r) in rows.iter().enumerate() {
-                for j in 0..=2 * HALF_W {
-                    if k == HALF_H && j == HALF_W {
-                        continue;
-                    }
-                    let xx = (x + j).saturating_sub(HALF_W).min(w - 1);
-                    c = (c << 1) | u64::from(r[xx] < centre);
+    out.par_chunks_mut(w).enumerate().for_each(|(y, codes)| {
+        let centre = &img[y * w..(y + 1) * w];
+        let mut padded = vec![0f32; w + 2 * HALF_W];
+        for k in 0..=2 * HALF_H {
+            let yy = (y + k).saturating_sub(HALF_H).min(h - 1);
+            let row = &img[yy * w..(yy + 1) * w];
+            padded[..HALF_W].fill(row[0]);
+            padded[HALF_W..HALF_W + w].copy_from_slice(row);
+            padded[HALF_W + w..].fill(row[w - 1]);
+            for j in 0..=2 * HALF_W {
+                if k == HALF_H && j == HALF_W {
+                    continue;
+                }
+                for ((code, &c), &n) in codes.iter_mut().zip(centre).zip(&padded[j..j + w]) {
+                    *code = (*code << 1) | u64::from(n < c);
                 }
             }
-            *code = c;
         }
     });
     out
@@ -107,6 +106,35 @@ mod tests {
         let hot = [4 * 100 + 3, 60 * 100 + 50];
         let max_normal = (0..100 * 100).filter(|i| !hot.contains(i)).map(|i| a[i]).fold(0.0, f32::max);
         assert!((250.0..=265.0).contains(&max_normal), "{max_normal}");
+    }
+
+    /// The census code of one pixel computed literally, bit by bit, with clamped coordinates.
+    fn census_at(img: &[f32], w: usize, h: usize, x: usize, y: usize) -> u64 {
+        let mut c = 0u64;
+        for dy in -(HALF_H as isize)..=HALF_H as isize {
+            for dx in -(HALF_W as isize)..=HALF_W as isize {
+                if (dx, dy) == (0, 0) {
+                    continue;
+                }
+                let xx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
+                let yy = (y as isize + dy).clamp(0, h as isize - 1) as usize;
+                c = (c << 1) | u64::from(img[yy * w + xx] < img[y * w + x]);
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn census_matches_the_definition_at_every_pixel() {
+        for (w, h) in [(23, 17), (3, 2), (1, 1)] {
+            let img: Vec<f32> = (0..w * h).map(|i| ((i * 7919 + 13) % 101) as f32).collect();
+            let codes = census(&img, w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    assert_eq!(codes[y * w + x], census_at(&img, w, h, x, y), "({x},{y}) in {w}x{h}");
+                }
+            }
+        }
     }
 
     #[test]

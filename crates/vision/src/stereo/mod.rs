@@ -286,6 +286,16 @@ mod tests {
     }
 
     #[test]
+    fn images_smaller_than_the_window_do_not_panic() {
+        for (w, h) in [(1, 1), (2, 1), (1, 5), (5, 3), (0, 0)] {
+            let (left, right) = shifted_pair(w, h, 1);
+            let disp = compute_disparity(&left, &right, &StereoParams::default()).unwrap();
+            assert_eq!(disp.data.len(), (w * h) as usize);
+            assert!(disp.data.iter().all(|&d| d == INVALID_DISPARITY || (0.0..=63.0).contains(&d)));
+        }
+    }
+
+    #[test]
     fn bad_sizes_are_refused_before_allocating() {
         let (left, right) = shifted_pair(40, 30, 2);
         let small = Grey16::new(40, 29);
