@@ -10,9 +10,9 @@
 //! 2. [`sgm`]: cost aggregation along 8 paths (section 3.3 of the paper, equation 13), P2
 //!    adapted to the intensity step along the path; winner-take-all for the left image and, from
 //!    the same matching costs aggregated for the right image, for the right one (section 3.4);
-//!    a parabola through the aggregated costs at d-1, d, d+1 for the subpixel disparity.
-//! 3. [`filters`]: the left-right consistency check (section 3.4), a uniqueness ratio, a
-//!    texture filter, a 3x3 median of the valid disparities and speckle removal (section 4.3
+//!    a parabola through the aggregated costs at d-1, d, d+1 for the subpixel disparity; a
+//!    uniqueness ratio.
+//! 3. [`filters`]: the left-right consistency check (section 3.4), a texture filter, a 3x3 median of the valid disparities and speckle removal (section 4.3
 //!    of the paper: small connected segments of similar disparity are outliers).
 //! 4. [`range`]: disparity to 3-D points, range and Matthies' range uncertainty for a
 //!    rectified linear (CAHV) pair, and conversion to the navigators' point cloud.
@@ -25,10 +25,17 @@
 //!   scale g sets the step that halves P2.
 //! - Pixels are rejected, never guessed: invalidated pixels (occlusions, mismatches, low
 //!   texture, speckles) stay invalid ([`INVALID_DISPARITY`]) and the paper's interpolation of
-//!   invalid disparities (section 4.4) is not done, because the navigators need only measured
-//!   range, and an interpolated range across an occlusion invents terrain.
+//!   invalid disparities (section 4.4) is not part of the matcher, because the navigators need
+//!   only measured range, and an interpolated range across an occlusion invents terrain. A
+//!   simpler fill ([`filters::fill_from_background`]) exists for benchmarks that score every
+//!   pixel (`rovernav stereo --truth`).
 //! - The right image's disparities come from its own aggregation of the same matching costs,
 //!   not from the left image's aggregated costs along a diagonal (see [`sgm`] for why).
+//! - Two rejections the paper does not have: a uniqueness ratio on the aggregated costs (a
+//!   second minimum more than 1 px away nearly as low means an ambiguous match) and the JPL
+//!   correlators' texture filter; both reject, neither guesses.
+//! - Intensities are scaled so both images' 99.9th percentile is 255 before the P2
+//!   adaptation and the texture filter, so their thresholds hold for 8- to 16-bit data.
 //! - The aggregation runs as two sweeps (the 4 paths coming from above and the left, and the
 //!   4 coming from below and the right), one per rayon task, each with its own `u16` sum
 //!   volume; the cost volume and the per-pixel steps run in parallel across rows.
