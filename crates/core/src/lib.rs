@@ -19,7 +19,7 @@ pub use nav::{
 };
 pub use rover::RoverConfig;
 pub use sensors::{
-    CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, RangeNoise, SensorFrame,
+    CameraImage, CameraKind, ImuSample, OdometrySample, PointCloud, ProximityReading, RangeNoise, SensorFrame,
     SensorNoise, Wedge,
 };
 

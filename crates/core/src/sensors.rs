@@ -119,6 +119,23 @@ pub struct OdometrySample {
     pub right_counts: i64,
 }
 
+/// A camera image as the platform reports it: grey, row-major, up to 16 bits per pixel.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CameraImage {
+    /// The camera's name (`navcam_left`, `hazcam_front_left`, ...).
+    pub camera: String,
+    /// Time of exposure (s).
+    pub t: f64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Bits per pixel used (12 for the rover's cameras).
+    pub bits: u8,
+    /// Pixel values, row-major, `width * height` of them.
+    pub pixels: Vec<u16>,
+}
+
 /// Everything the platform reports after executing one command.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SensorFrame {
@@ -134,6 +151,8 @@ pub struct SensorFrame {
     pub proximity: ProximityReading,
     /// Whether a motion stopped early (guard, hazard or stall), and why.
     pub motion_stopped: Option<String>,
+    /// Camera images taken during the command (the left image of each correlated stereo pair).
+    pub images: Vec<CameraImage>,
 }
 
 /// Range error of one range sensor: standard deviation `constant + quadratic * r^2` at range `r`

@@ -8,6 +8,7 @@
 //! `rovernav_bus::Bus`; [`run`] assembles a run and scores it. The autonomy only ever sees sensor
 //! messages; ground truth stays inside the simulator and is used solely to score the run.
 
+pub mod camera_server;
 pub mod command_language;
 pub mod components;
 pub mod deliberative;

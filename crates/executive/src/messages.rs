@@ -9,8 +9,8 @@
 use crate::components::JausState;
 use rovernav_bus::Topic;
 use rovernav_core::{
-    CameraKind, DriveGuard, Goal, ImuSample, NavCommand, OdometrySample, Outcome, Point2, PointCloud, Pose3,
-    PoseEstimate, ProximityReading, SenseRequest, SensorFrame, Wedge,
+    CameraImage, CameraKind, DriveGuard, Goal, ImuSample, NavCommand, OdometrySample, Outcome, Point2,
+    PointCloud, Pose3, PoseEstimate, ProximityReading, SenseRequest, SensorFrame, Wedge,
 };
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +20,8 @@ pub mod topics {
 
     /// Platform -> everyone: what the sensors reported after one platform action.
     pub const PLATFORM_FRAME: Topic<FrameMsg> = Topic::new("/platform/frame");
+    /// Camera server -> everyone: each camera image the platform took.
+    pub const CAMERA_IMAGE: Topic<ImageMsg> = Topic::new("/camera/image");
     /// Motion controller -> platform: the one motion or sensing command to execute now.
     pub const PLATFORM_COMMAND: Topic<MotionRequest> = Topic::new("/platform/command");
     /// Deliberative layer or tooling arm -> platform: stand still, sampling, until a time.
@@ -472,6 +474,75 @@ pub struct FrameMsg {
     pub proximity: [bool; 10],
     /// Why a motion stopped early, if it did.
     pub motion_stopped: Option<String>,
+    /// Camera images taken during the action.
+    #[serde(default)]
+    pub images: Vec<ImageMsg>,
+}
+
+/// One grey camera image.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImageMsg {
+    /// The camera's name.
+    pub camera: String,
+    /// Time of exposure (s).
+    pub t: f64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Bits per pixel used.
+    pub bits: u8,
+    /// Pixel values, row-major (base64 of little-endian u16 on the wire).
+    #[serde(with = "pixels_base64")]
+    pub pixels: Vec<u16>,
+}
+
+/// Pixels as base64 of their little-endian bytes: a third larger than the bytes, where a JSON
+/// number array is about three times larger.
+mod pixels_base64 {
+    use base64::Engine as _;
+    use base64::engine::general_purpose::STANDARD;
+    use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
+
+    pub fn serialize<S: Serializer>(pixels: &[u16], s: S) -> Result<S::Ok, S::Error> {
+        let bytes: Vec<u8> = pixels.iter().flat_map(|v| v.to_le_bytes()).collect();
+        s.serialize_str(&STANDARD.encode(bytes))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<u16>, D::Error> {
+        let text = String::deserialize(d)?;
+        let bytes = STANDARD.decode(text.as_bytes()).map_err(D::Error::custom)?;
+        if bytes.len() % 2 != 0 {
+            return Err(D::Error::custom("pixels: an odd number of bytes for 16-bit pixels"));
+        }
+        Ok(bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect())
+    }
+}
+
+impl From<&CameraImage> for ImageMsg {
+    fn from(i: &CameraImage) -> Self {
+        Self {
+            camera: i.camera.clone(),
+            t: i.t,
+            width: i.width,
+            height: i.height,
+            bits: i.bits,
+            pixels: i.pixels.clone(),
+        }
+    }
+}
+
+impl From<&ImageMsg> for CameraImage {
+    fn from(i: &ImageMsg) -> Self {
+        Self {
+            camera: i.camera.clone(),
+            t: i.t,
+            width: i.width,
+            height: i.height,
+            bits: i.bits,
+            pixels: i.pixels.clone(),
+        }
+    }
 }
 
 impl FrameMsg {
@@ -490,6 +561,7 @@ impl FrameMsg {
                 .collect(),
             proximity: f.proximity.raw,
             motion_stopped: f.motion_stopped.clone(),
+            images: f.images.iter().map(ImageMsg::from).collect(),
         }
     }
 
@@ -506,6 +578,7 @@ impl FrameMsg {
                 .collect(),
             proximity: ProximityReading { raw: self.proximity },
             motion_stopped: self.motion_stopped.clone(),
+            images: self.images.iter().map(CameraImage::from).collect(),
         }
     }
 
@@ -722,6 +795,14 @@ mod tests {
                 raw: [false, true, false, false, false, false, false, false, false, true],
             },
             motion_stopped: Some("stall".into()),
+            images: vec![CameraImage {
+                camera: "navcam_left".into(),
+                t: 12.0,
+                width: 3,
+                height: 2,
+                bits: 12,
+                pixels: vec![0, 1, 4095, 7, 8, 9],
+            }],
         };
         let request = MotionRequest {
             id: 4,
@@ -757,6 +838,7 @@ mod tests {
         use topics::*;
         for name in [
             PLATFORM_FRAME.name(),
+            CAMERA_IMAGE.name(),
             PLATFORM_COMMAND.name(),
             PLATFORM_HOLD.name(),
             NAVIGATION_COMMAND.name(),

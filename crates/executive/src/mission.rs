@@ -168,6 +168,21 @@ pub struct SensorSpec {
     /// pairs): 0 is noise-free stereo, 2 twice the default sigma.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stereo_noise_scale: Option<f64>,
+    /// Where the stereo pairs' range comes from: `raycast` (rays cast against the true terrain
+    /// with a noise model, the default) or `stereo` (both cameras' images rendered and
+    /// correlated, as on a real rover).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range_source: Option<RangeSourceSpec>,
+}
+
+/// The simulator's source of stereo range, as a mission file names it.
+#[derive(Clone, Copy, Debug, Deserialize, serde::Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum RangeSourceSpec {
+    /// Rays cast against the true terrain, with Gaussian range noise and dropouts.
+    Raycast,
+    /// Rendered stereo images, correlated by semi-global matching.
+    Stereo,
 }
 
 impl SensorSpec {
@@ -182,6 +197,7 @@ impl SensorSpec {
             compass_sigma_deg: over.compass_sigma_deg.or(self.compass_sigma_deg),
             stereo_dropout: over.stereo_dropout.or(self.stereo_dropout),
             stereo_noise_scale: over.stereo_noise_scale.or(self.stereo_noise_scale),
+            range_source: over.range_source.or(self.range_source),
         }
     }
 
@@ -644,13 +660,15 @@ mod tests {
             ("stereo_dropout = 1.5", "sensors.stereo_dropout"),
             ("stereo_noise_scale = -1.0", "sensors.stereo_noise_scale"),
             ("compass_sigma_deg = nan", "sensors.compass_sigma_deg"),
+            ("range_source = \"lidar\"", "expected `raycast` or `stereo`"),
         ] {
             let text = format!("{DEFAULT_MISSION_TOML}\n[sensors]\n{line}\n");
             let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
             assert!(err.contains("m.toml") && err.contains(field), "{line}: {err}");
         }
-        let text =
-            format!("{DEFAULT_MISSION_TOML}\n[sensors]\nstereo_noise_scale = 0.0\nstereo_dropout = 0.1\n");
+        let text = format!(
+            "{DEFAULT_MISSION_TOML}\n[sensors]\nstereo_noise_scale = 0.0\nstereo_dropout = 0.1\nrange_source = \"stereo\"\n"
+        );
         let m = Mission::from_toml(&text, "m.toml").unwrap();
         // The mission file table written back parses to the same overrides.
         let again =
@@ -658,6 +676,7 @@ mod tests {
                 .unwrap();
         assert_eq!(again.sensors, m.sensors);
         assert_eq!(m.sensors.stereo_noise_scale, Some(0.0));
+        assert_eq!(m.sensors.range_source, Some(RangeSourceSpec::Stereo));
     }
 
     #[test]

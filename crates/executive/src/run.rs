@@ -572,6 +572,7 @@ pub(crate) fn add_components(
     runtime.add(Box::new(MotionController::new()))?;
     runtime.add(platform)?;
     runtime.add(Box::new(RangeSensors::new()))?;
+    runtime.add(Box::new(crate::camera_server::CameraServer::new()))?;
     runtime.add(Box::new(InertialSensors::new()))?;
     runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
     runtime.add(Box::new(ContactMonitor::new(MAX_BODY_CONTACTS)))?;

@@ -328,6 +328,7 @@ mod tests {
             odometry: vec![],
             proximity: [false; 10],
             motion_stopped: None,
+            images: vec![],
         }
     }
 

@@ -1,9 +1,9 @@
 //! Building the world a mission names: terrain, rover, sensors, start and goal in local metres.
 
-use crate::mission::{GoalSpec, Mission, PoseSpec, TerrainSpec};
+use crate::mission::{GoalSpec, Mission, PoseSpec, RangeSourceSpec, TerrainSpec};
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
 use rovernav_planning::{Cell, CostGrid, FieldDStar, GlobalPlanner};
-use rovernav_sim::SensorModel;
+use rovernav_sim::{RangeSource, SensorModel};
 use rovernav_terrain::procedural::{ClearPad, RockyRegionParams, rocky_region};
 use rovernav_terrain::{LocalRect, MarsYardParams, RockFieldParams, Terrain};
 use std::path::PathBuf;
@@ -93,6 +93,12 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
             imager.sigma_constant *= k;
             imager.sigma_quadratic *= k;
         }
+    }
+    if let Some(source) = mission.sensors.range_source {
+        sensor_model.range_source = match source {
+            RangeSourceSpec::Raycast => RangeSource::Raycast,
+            RangeSourceSpec::Stereo => RangeSource::Stereo,
+        };
     }
     let invalid = |field: &str, message: String| WorldError::Invalid {
         origin: origin.into(),

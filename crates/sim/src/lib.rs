@@ -12,10 +12,12 @@ pub mod raycast;
 pub mod render;
 pub mod sensors;
 pub mod simulator;
+pub mod stereo_range;
 pub mod vehicle;
 
 pub use hazard::true_hazard_grid;
 pub use raycast::{HeightField, RayHit};
 pub use sensors::{LidarModel, ProximityModel, RangeImagerModel, SensorModel};
 pub use simulator::{Fault, Simulator};
+pub use stereo_range::{RangeSource, StereoImaging};
 pub use vehicle::{Hazard, SlipModel, VehicleGeometry};

@@ -28,6 +28,7 @@ use rovernav_core::{
 use rovernav_terrain::Dem;
 
 use crate::raycast::HeightField;
+use crate::stereo_range::{RangeSource, StereoImaging};
 use crate::vehicle::SlipModel;
 
 /// Parameters of one range imager: ray grid, coverage and noise.
@@ -126,6 +127,10 @@ pub struct SensorModel {
     pub initial_rest_samples: usize,
     /// Wheel-terrain slip (the encoder error model).
     pub slip: SlipModel,
+    /// Where the stereo pairs' range comes from (the LIDAR is always ray cast).
+    pub range_source: RangeSource,
+    /// How the `stereo` range source images and correlates.
+    pub stereo: StereoImaging,
 }
 
 impl Default for SensorModel {
@@ -215,6 +220,8 @@ impl Default for SensorModel {
             sample_rate: 10.0,
             initial_rest_samples: 20,
             slip: SlipModel::default(),
+            range_source: RangeSource::default(),
+            stereo: StereoImaging::default(),
         }
     }
 }

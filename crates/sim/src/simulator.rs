@@ -12,13 +12,14 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rovernav_core::{
-    CameraKind, DriveGuard, NavCommand, OdometrySample, Pose2, Pose3, ProximityReading, RoverConfig,
-    SenseRequest, SensorFrame, wrap_angle,
+    CameraImage, CameraKind, DriveGuard, NavCommand, OdometrySample, PointCloud, Pose2, Pose3,
+    ProximityReading, RoverConfig, SenseRequest, SensorFrame, wrap_angle,
 };
 use rovernav_terrain::Terrain;
 
 use crate::raycast::HeightField;
 use crate::sensors::{self, Proprioception, RangeGeometry, SensorModel, gaussian};
+use crate::stereo_range::{self, RangeSource};
 use crate::vehicle::{self, VehicleGeometry};
 
 /// Time the motor-current monitor takes to declare a stalled wheel (s).
@@ -294,14 +295,36 @@ impl Simulator {
             }
             SenseRequest::Lidar { pan } => (RangeGeometry::lidar(&self.model, pan), &self.model.lidar.imager),
         };
-        let mut cloud = sensors::capture(
-            &self.terrain.dem,
-            &self.field,
-            &self.truth,
-            &geometry,
-            imager,
-            &mut self.range_rng,
-        );
+        let stereo = self.model.range_source == RangeSource::Stereo && geometry.camera != CameraKind::Lidar;
+        let mut cloud = if stereo {
+            let capture = stereo_range::capture(
+                &self.terrain,
+                &self.field,
+                &self.truth,
+                &geometry,
+                &self.model.stereo,
+                &mut self.range_rng,
+            );
+            frame.images.push(CameraImage {
+                camera: stereo_range::left_camera_name(geometry.camera).into(),
+                t: self.time,
+                width: capture.left.image.width(),
+                height: capture.left.image.height(),
+                bits: 12,
+                pixels: capture.left.image.into_raw(),
+            });
+            // The navigators' wedge is the one the ray grid would have covered.
+            PointCloud { wedge: geometry.wedge(imager), ..capture.cloud }
+        } else {
+            sensors::capture(
+                &self.terrain.dem,
+                &self.field,
+                &self.truth,
+                &geometry,
+                imager,
+                &mut self.range_rng,
+            )
+        };
         if self.faults.silent.contains(&geometry.camera) {
             cloud.points.clear();
         }

@@ -1,8 +1,8 @@
 //! The run observer that logs every topic of a run to MCAP.
 
 use crate::messages::{
-    CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, SensorFrameMsg, SettingsMsg,
-    TruthMsg, WorldMsg, report_schema, topics,
+    CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, RawImageMsg, SensorFrameMsg,
+    SettingsMsg, TruthMsg, WorldMsg, camera_topic, report_schema, topics,
 };
 use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
 use rovernav_bus::Record;
@@ -133,6 +133,20 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
         lock(&self.shared).apply(|w| w.write(topic, time_ns, msg));
     }
 
+    /// Logs a frame's camera images, each on its camera's topic (declared on first use).
+    fn put_images(&self, time_ns: u64, frame: &SensorFrame) {
+        for image in &frame.images {
+            let topic = camera_topic(&image.camera);
+            let msg = RawImageMsg::of(image);
+            lock(&self.shared).apply(|w| {
+                if !w.has_topic(&topic) {
+                    w.add_topic(&topic, "foxglove.RawImage", &RawImageMsg::schema(), &BTreeMap::new())?;
+                }
+                w.write(&topic, time_ns, &msg)
+            });
+        }
+    }
+
     fn end_cycle(&self, cycle: u64, sim_time_s: f64, t: u64) {
         let wall_time_s = self.opened.elapsed().as_secs_f64();
         self.put(topics::CYCLE, t, &CycleMsg { cycle, sim_time_s, wall_time_s });
@@ -225,6 +239,7 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
         let t = self.stamp(r.sim_time_s);
         self.put(topics::COMMAND, t, &CommandMsg::of(r.cycle, r.sim_time_s, r.command));
         self.put(topics::SENSOR_FRAME, t, &SensorFrameMsg::of(r.cycle, r.frame));
+        self.put_images(t, r.frame);
         self.put(topics::ESTIMATE, t, &EstimateMsg::of(r.cycle, r.sim_time_s, r.estimate));
         let truth = TruthMsg {
             simulation_truth: true,

@@ -155,8 +155,10 @@ fn pose3_schema(description: &str) -> Value {
     )
 }
 
+mod image;
 mod world;
 
+pub use image::{RawImageMsg, TimeMsg, camera_topic};
 pub use world::{
     GoalMsg, GridMsg, ImagerMsg, LidarMsg, ProximityModelMsg, RockMsg, RoverMsg, SensorModelMsg, SlipMsg,
     TerrainMsg, WorldMsg,
@@ -441,6 +443,9 @@ impl SensorFrameMsg {
                 .collect(),
             proximity: ProximityReading { raw },
             motion_stopped: self.motion_stopped.clone(),
+            // Images go to their own topics (`/camera/NAME`); no consumer of a replayed frame
+            // reads them.
+            images: Vec::new(),
         })
     }
 
@@ -1081,6 +1086,7 @@ mod tests {
                 raw: [true, false, false, false, true, false, false, false, false, true],
             },
             motion_stopped: Some("proximity".into()),
+            images: Vec::new(),
         }
     }
 

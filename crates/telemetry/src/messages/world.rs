@@ -2,10 +2,14 @@
 
 use super::{Point2Msg, Pose2Msg, point_schema, points_schema, pose2_schema};
 use crate::base64;
-use crate::schema::{array, boolean, bytes, fixed_array, integer, message, nullable, number, object, string};
+use crate::schema::{
+    array, boolean, bytes, enumeration, fixed_array, integer, message, nullable, number, object, string,
+};
 use rovernav_core::{Goal, GridGeometry, Pose2, RoverConfig};
 use rovernav_executive::World;
-use rovernav_sim::{LidarModel, ProximityModel, RangeImagerModel, SensorModel, SlipModel};
+use rovernav_sim::{
+    LidarModel, ProximityModel, RangeImagerModel, RangeSource, SensorModel, SlipModel, StereoImaging,
+};
 use rovernav_terrain::{Dem, GeoReference, Rock, Terrain};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -198,6 +202,9 @@ pub struct SensorModelMsg {
     pub initial_rest_samples: u64,
     /// Wheel slip.
     pub slip: SlipMsg,
+    /// Source of the stereo pairs' range (`raycast` or `stereo`); absent in older logs.
+    #[serde(default)]
+    pub range_source: Option<String>,
 }
 
 /// Goal, waypoints and keep-out zones.
@@ -343,6 +350,13 @@ impl WorldMsg {
                     turn_scrub: s.slip.turn_scrub,
                     per_command_sigma: s.slip.per_command_sigma,
                 },
+                range_source: Some(
+                    match s.range_source {
+                        RangeSource::Raycast => "raycast",
+                        RangeSource::Stereo => "stereo",
+                    }
+                    .into(),
+                ),
             },
             start: Pose2Msg { x: world.start.x, y: world.start.y, yaw: world.start.yaw },
             goal: GoalMsg {
@@ -454,6 +468,16 @@ impl WorldMsg {
                     turn_scrub: s.slip.turn_scrub,
                     per_command_sigma: s.slip.per_command_sigma,
                 },
+                range_source: match s.range_source.as_deref() {
+                    None | Some("raycast") => RangeSource::Raycast,
+                    Some("stereo") => RangeSource::Stereo,
+                    Some(other) => {
+                        return Err(format!(
+                            "sensor_model.range_source: unknown range source {other:?} (raycast or stereo)"
+                        ));
+                    }
+                },
+                stereo: StereoImaging::default(),
             },
             start: Pose2::new(self.start.x, self.start.y, self.start.yaw),
             goal: Goal {
@@ -617,6 +641,10 @@ impl WorldMsg {
                                         ("per_command_sigma", number("per-command slip sigma")),
                                     ],
                                 ),
+                            ),
+                            (
+                                "range_source",
+                                nullable(enumeration("source of the stereo range", &["raycast", "stereo"])),
                             ),
                         ],
                     ),
