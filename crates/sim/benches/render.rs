@@ -2,7 +2,7 @@
 //! rays, against the baseline of casting the same primary rays alone (the range imager's ray
 //! cast, no shading, no sensor), all on the rayon pool of the machine and on one thread.
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Point2;
 use rayon::prelude::*;
 use rovernav_core::{Pose3, RoverConfig};
@@ -27,6 +27,8 @@ fn benches(c: &mut Criterion) {
     let no_shadows = RenderSettings { shadows: false, ..RenderSettings::default() };
     let mut group = c.benchmark_group("render navcam 1024x1024");
     group.sample_size(10);
+    // Throughput in pixels: criterion prints megapixels per second.
+    group.throughput(Throughput::Elements((world.width() * world.height()) as u64));
     group.bench_function("baseline: primary ray casts only", |b| {
         b.iter(|| {
             (0..world.height())
