@@ -276,7 +276,8 @@ impl RockIndex {
         Self { origin, cols, rows, buckets, margin: g.resolution }
     }
 
-    /// The rock whose footprint holds (x, y), the smallest if several overlap.
+    /// The rock whose footprint holds (x, y); where rocks overlap (their heights add up in the
+    /// DEM), the one that adds the most height there.
     fn find(&self, rocks: &[rovernav_terrain::Rock], x: f64, y: f64) -> Option<usize> {
         let (c, r) = ((x - self.origin.0) / BUCKET, (y - self.origin.1) / BUCKET);
         if c < 0.0 || r < 0.0 || c >= self.cols as f64 || r >= self.rows as f64 {
@@ -286,6 +287,13 @@ impl RockIndex {
             .iter()
             .map(|&i| i as usize)
             .filter(|&i| (x - rocks[i].x).hypot(y - rocks[i].y) <= 0.5 * rocks[i].diameter + self.margin)
-            .min_by(|&a, &b| rocks[a].diameter.total_cmp(&rocks[b].diameter))
+            .max_by(|&a, &b| dome(&rocks[a], x, y).total_cmp(&dome(&rocks[b], x, y)))
     }
+}
+
+/// Height a rock's dome adds at (x, y) (negative outside it: minus the distance beyond its rim).
+fn dome(rock: &rovernav_terrain::Rock, x: f64, y: f64) -> f64 {
+    let r = 0.5 * rock.diameter;
+    let d = (x - rock.x).hypot(y - rock.y);
+    if d < r { rock.height * (1.0 - (d / r).powi(2)).sqrt() } else { r - d }
 }
