@@ -1,0 +1,154 @@
+//! The working image of the detectors: a float plane reduced to a working size, with the box
+//! filters, masked (normalised) box filters and robust statistics the detectors share.
+//!
+//! Box filters are separable running sums, so their cost does not depend on the radius; near
+//! the border (and outside a mask) a box averages only the pixels it covers (normalised
+//! convolution, Knutsson and Westin 1993), so borders are not darkened.
+
+use rovernav_vision::image::GreyF32;
+
+/// A row-major float image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plane {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Row-major values.
+    pub data: Vec<f32>,
+}
+
+impl Plane {
+    /// A plane of `width x height` filled with `value`.
+    pub fn filled(width: usize, height: usize, value: f32) -> Self {
+        Self { width, height, data: vec![value; width * height] }
+    }
+
+    /// The value at column `x`, row `y`.
+    pub fn at(&self, x: usize, y: usize) -> f32 {
+        self.data[y * self.width + x]
+    }
+
+    /// The image reduced by block means of `factor x factor` pixels (partial blocks at the right
+    /// and bottom edges average what they hold); non-finite pixels count as 0.
+    pub fn reduced(image: &GreyF32, factor: usize) -> Self {
+        let f = factor.max(1);
+        let (w, h) = (image.width() as usize, image.height() as usize);
+        let (rw, rh) = (w.div_ceil(f), h.div_ceil(f));
+        let mut sum = vec![0f64; rw * rh];
+        let mut count = vec![0u32; rw * rh];
+        let raw = image.as_raw();
+        for y in 0..h {
+            let row = &raw[y * w..(y + 1) * w];
+            let base = (y / f) * rw;
+            for (x, &v) in row.iter().enumerate() {
+                let i = base + x / f;
+                sum[i] += if v.is_finite() { v as f64 } else { 0.0 };
+                count[i] += 1;
+            }
+        }
+        let data = sum.iter().zip(&count).map(|(s, &c)| (s / c.max(1) as f64) as f32).collect();
+        Self { width: rw, height: rh, data }
+    }
+
+    /// Box mean of radius `r` (a `(2r+1)^2` window, clipped at the borders).
+    pub fn box_mean(&self, r: usize) -> Self {
+        let ones = vec![1f32; self.data.len()];
+        self.masked_mean_with(&ones, r)
+    }
+
+    /// Box mean of radius `r` over the pixels whose `weight` is non-zero (normalised
+    /// convolution); a window without weight gives 0.
+    pub fn masked_mean_with(&self, weight: &[f32], r: usize) -> Self {
+        let weighted: Vec<f32> = self.data.iter().zip(weight).map(|(v, w)| v * w).collect();
+        let num = box_sum(&weighted, self.width, self.height, r);
+        let den = box_sum(weight, self.width, self.height, r);
+        let data = num.iter().zip(&den).map(|(n, d)| if *d > 1e-6 { (n / d) as f32 } else { 0.0 }).collect();
+        Self { width: self.width, height: self.height, data }
+    }
+}
+
+/// Sums over a `(2r+1)^2` box clipped at the borders (separable running sums, f64).
+pub fn box_sum(values: &[f32], w: usize, h: usize, r: usize) -> Vec<f64> {
+    let mut rows = vec![0f64; w * h];
+    let mut prefix = vec![0f64; w.max(h) + 1];
+    for y in 0..h {
+        for x in 0..w {
+            prefix[x + 1] = prefix[x] + values[y * w + x] as f64;
+        }
+        for x in 0..w {
+            let (a, b) = (x.saturating_sub(r), (x + r + 1).min(w));
+            rows[y * w + x] = prefix[b] - prefix[a];
+        }
+    }
+    let mut out = vec![0f64; w * h];
+    for x in 0..w {
+        for y in 0..h {
+            prefix[y + 1] = prefix[y] + rows[y * w + x];
+        }
+        for y in 0..h {
+            let (a, b) = (y.saturating_sub(r), (y + r + 1).min(h));
+            out[y * w + x] = prefix[b] - prefix[a];
+        }
+    }
+    out
+}
+
+/// The `q` quantile (0..1) of the finite values (0 for none).
+pub fn quantile(values: impl IntoIterator<Item = f32>, q: f64) -> f32 {
+    let mut v: Vec<f32> = values.into_iter().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    let i = ((v.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
+    let (_, x, _) = v.select_nth_unstable_by(i, f32::total_cmp);
+    *x
+}
+
+/// Robust standard deviation of zero-mean noise: 1.4826 x the median absolute value.
+pub fn robust_sigma(values: impl IntoIterator<Item = f32>) -> f32 {
+    1.4826 * quantile(values.into_iter().map(f32::abs), 0.5)
+}
+
+/// The reduction factor that brings the longer side to at most `max_side` pixels.
+pub fn factor_for(width: u32, height: u32, max_side: usize) -> usize {
+    (width.max(height) as usize).div_ceil(max_side.max(1)).max(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::Luma;
+
+    #[test]
+    fn box_mean_equals_brute_force_and_keeps_constants() {
+        let (w, h) = (13, 9);
+        let p = Plane { width: w, height: h, data: (0..w * h).map(|i| ((i * 37) % 11) as f32).collect() };
+        let m = p.box_mean(2);
+        for y in 0..h {
+            for x in 0..w {
+                let (mut s, mut n) = (0.0, 0.0);
+                for yy in y.saturating_sub(2)..(y + 3).min(h) {
+                    for xx in x.saturating_sub(2)..(x + 3).min(w) {
+                        s += p.at(xx, yy);
+                        n += 1.0;
+                    }
+                }
+                assert!((m.at(x, y) - s / n).abs() < 1e-4);
+            }
+        }
+        let c = Plane::filled(7, 5, 3.5).box_mean(10);
+        assert!(c.data.iter().all(|v| (v - 3.5).abs() < 1e-6));
+    }
+
+    #[test]
+    fn reduction_averages_blocks() {
+        let img = GreyF32::from_fn(5, 3, |x, y| Luma([(x + 10 * y) as f32]));
+        let r = Plane::reduced(&img, 2);
+        assert_eq!((r.width, r.height), (3, 2));
+        assert_eq!(r.at(0, 0), (0.0 + 1.0 + 10.0 + 11.0) / 4.0);
+        assert_eq!(r.at(2, 1), 24.0);
+        assert_eq!(factor_for(7696, 1800, 512), 16);
+        assert_eq!(robust_sigma([1.0, -1.0, 1.0]), 1.4826);
+    }
+}
