@@ -9,6 +9,7 @@ use rovernav_sim::render::{
     render,
 };
 use rovernav_terrain::{Dem, Rock, Terrain};
+use rovernav_vision::camera::Cahvor;
 use rovernav_vision::{Cahv, CameraModel};
 
 fn flat(size_m: f64, res: f64) -> Terrain {
@@ -86,8 +87,25 @@ fn projected_ground_points_meet_the_rendered_range() {
     let field = HeightField::new(&terrain.dem);
     let scene = Scene::new(&terrain, &field, &sun(), Atmosphere::default());
     let d = 30f64.to_radians();
-    let cam = camera([1.0, 1.0, 1.2], [d.cos() * 0.8, d.cos() * 0.6, -d.sin()], [0.6, -0.8, 0.0], 45.0, 256);
-    let img = render(&scene, &cam, "test", &noiseless(), 1);
+    let linear =
+        camera([1.0, 1.0, 1.2], [d.cos() * 0.8, d.cos() * 0.6, -d.sin()], [0.6, -0.8, 0.0], 45.0, 256);
+    check_projected_ground_range(&scene, &linear);
+    // A lens with radial distortion (CAHVOR, R terms of a wide lens) renders through the same
+    // call and meets the same test.
+    let distorted = Cahvor::new(linear, linear.a, Vector3::new(0.0, -0.08, 0.02));
+    let shift = [(2.2, 3.1), (4.1, 3.3), (3.6, 4.0)]
+        .iter()
+        .map(|&(x, y)| {
+            let p = Point3::new(x, y, 0.0);
+            (distorted.project(&p).unwrap() - linear.project(&p).unwrap()).norm()
+        })
+        .fold(0f64, f64::max);
+    assert!(shift > 1.0, "the distortion moves points by {shift} px");
+    check_projected_ground_range(&scene, &distorted);
+}
+
+fn check_projected_ground_range(scene: &Scene, cam: &dyn CameraModel) {
+    let img = render(scene, cam, "test", &noiseless(), 1);
     let w = cam.width();
     let mut checked = 0;
     for (x, y) in [(3.0, 2.5), (2.2, 3.1), (4.1, 3.3), (2.9, 1.9), (3.6, 4.0)] {
@@ -101,7 +119,7 @@ fn projected_ground_points_meet_the_rendered_range() {
         let r = |c: usize, r: usize| img.range[r * w + c] as f64;
         let interp = (r(c0, r0) * (1.0 - tx) + r(c0 + 1, r0) * tx) * (1.0 - ty)
             + (r(c0, r0 + 1) * (1.0 - tx) + r(c0 + 1, r0 + 1) * tx) * ty;
-        let truth = (p.coords - cam.c).norm();
+        let truth = (p - cam.centre()).norm();
         assert!((interp - truth).abs() < 1e-3, "{x},{y}: {interp} vs {truth}");
         checked += 1;
     }
