@@ -127,7 +127,8 @@ pub struct StereoParams {
     pub speckle_step: f32,
     /// Apply a 3x3 median to the valid disparities.
     pub median: bool,
-    /// Bound on width x height x disparities: the matcher holds up to 6 bytes per cell.
+    /// Bound on width x height x disparities: the matcher holds up to 6 bytes per cell (the
+    /// default, 10^8, is 600 MB: a 1024x1024 image at up to 95 disparities).
     pub max_volume_cells: u64,
 }
 
@@ -144,7 +145,7 @@ impl Default for StereoParams {
             speckle_size: 60,
             speckle_step: 1.0,
             median: true,
-            max_volume_cells: 1 << 26,
+            max_volume_cells: 100_000_000,
         }
     }
 }
