@@ -1,7 +1,7 @@
 //! Parameters of terrain assessment, derived from the rover's dimensions.
 
 use crate::PerceptionError;
-use crate::footprint::FootprintParams;
+use crate::footprint::{FootprintParams, GroundRefit};
 use crate::goodness::GoodnessParams;
 use crate::traversability::TraversabilityParams;
 use rovernav_core::RoverConfig;
@@ -98,12 +98,9 @@ pub struct TerrainConfig {
     /// within which a raised cell counts as reaching the step limit; such hazards are flagged
     /// uncertain. 0 = the measured height must exceed the limit itself.
     pub hazard_confidence: f64,
-    /// Low cells are pits only where the window centred on them finds them low (see
-    /// [`crate::footprint::FootprintParams::pits_in_own_window`]).
-    pub pits_in_own_window: bool,
-    /// A hazardous window's ground is the refit holding the most cells (see
-    /// [`crate::footprint::FootprintParams::robust_ground`]).
-    pub robust_ground: bool,
+    /// How a hazardous window's ground is refitted and where low cells are pits (see
+    /// [`GroundRefit`]).
+    pub ground: GroundRefit,
 }
 
 impl Default for TerrainConfig {
@@ -136,8 +133,7 @@ impl TerrainConfig {
             density: DensityConfig::default(),
             range_noise: None,
             hazard_confidence: 0.0,
-            pits_in_own_window: false,
-            robust_ground: false,
+            ground: GroundRefit::WholeWindow,
         }
     }
 
@@ -234,8 +230,7 @@ impl TerrainConfig {
             min_cells: ((self.min_window_fraction * window).ceil() as usize).max(3),
             step_limit: self.clearance,
             slope_limit: self.max_tilt,
-            pits_in_own_window: self.pits_in_own_window,
-            robust_ground: self.robust_ground,
+            ground: self.ground,
         }
     }
 

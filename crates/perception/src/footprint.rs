@@ -47,16 +47,41 @@ pub struct FootprintParams {
     pub step_limit: f64,
     /// Plane tilt above which a window is hazardous (rad).
     pub slope_limit: f64,
-    /// Cells below the ground plane count as obstacles (pits) only in the window centred on
-    /// them: beside a rock that fills most of a window, the refitted "ground" is the rock and
-    /// the open ground next to it reads as a pit, while a real pit is low in its own window.
-    pub pits_in_own_window: bool,
-    /// The ground of a hazardous window is the refit holding the most cells, from the
-    /// whole-window plane or from level planes at the lower and upper quartile heights (see
-    /// `window_ground`), not only the refit from the whole-window plane. On its own it takes a
-    /// rock filling most of a window as the ground; with `pits_in_own_window` the open ground
-    /// beside the rock is no longer a pit anywhere.
-    pub robust_ground: bool,
+    /// How a hazardous window's ground is refitted, and where a cell below it is a pit.
+    pub ground: GroundRefit,
+}
+
+/// How the step model refits the ground of a hazardous footprint window, and in which windows
+/// a cell below that ground counts as a pit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GroundRefit {
+    /// The refit from the whole-window plane only, and a low cell is a pit in any window: the
+    /// grid navigators' model (on top heights the robust refit cost `astar-grid` contacts, its
+    /// margins having been set on this one).
+    #[default]
+    WholeWindow,
+    /// The refit holding the most cells, from the whole-window plane or from level planes at
+    /// the lower and upper quartile heights (see `window_ground`); a low cell is a pit in any
+    /// window. Beside a rock wider than the window the whole-window plane stays tilted between
+    /// rock and ground; this one finds the ground. RoverBug's safety layer (top heights).
+    Robust,
+    /// [`GroundRefit::Robust`], and a low cell is a pit only in the window centred on it: a
+    /// rock filling most of a window can be that window's refitted "ground", and the open
+    /// ground next to it then reads as a pit, while a real pit is low in its own window.
+    /// RoverBug's C-obstacle model (cell means).
+    RobustOwnPits,
+}
+
+impl GroundRefit {
+    /// Whether the ground is also refitted from level planes at the quartile heights.
+    pub fn robust(self) -> bool {
+        self != GroundRefit::WholeWindow
+    }
+
+    /// Whether a low cell is a pit only in the window centred on it.
+    pub fn pits_in_own_window(self) -> bool {
+        self == GroundRefit::RobustOwnPits
+    }
 }
 
 /// Per-cell results of the footprint analysis, row-major, NaN where not assessed.
@@ -438,7 +463,7 @@ pub fn analyse_footprints_with_tolerance(
                     &mut scratch,
                     &mut out.obstacle,
                     &mut uncertain,
-                    (i, params.pits_in_own_window, params.robust_ground),
+                    (i, params.ground.pits_in_own_window(), params.ground.robust()),
                 );
                 ground_slope = (gb.hypot(gc) / resolution).atan();
             }
@@ -464,8 +489,7 @@ mod tests {
             min_cells: 12,
             step_limit: 0.18,
             slope_limit: 25f64.to_radians(),
-            pits_in_own_window: false,
-            robust_ground: false,
+            ground: GroundRefit::WholeWindow,
         }
     }
 
@@ -486,7 +510,7 @@ mod tests {
         let h = grid(30, 30, |x, y| 3000.0 + g * (0.6 * x + 0.8 * y));
         let out = analyse_footprints(&h, 30, 30, 0.15, &params());
         assert!(out.obstacle.iter().all(|&o| !o));
-        let robust = FootprintParams { robust_ground: true, pits_in_own_window: true, ..params() };
+        let robust = FootprintParams { ground: GroundRefit::RobustOwnPits, ..params() };
         assert_eq!(analyse_footprints(&h, 30, 30, 0.15, &robust), out);
         let centre = 15 * 30 + 15;
         assert!((out.slope[centre] as f64 - 20f64.to_radians()).abs() < 1e-3);
@@ -510,7 +534,7 @@ mod tests {
                 h[r * 25 + c] = 0.25;
             }
         }
-        let robust = FootprintParams { robust_ground: true, pits_in_own_window: true, ..params() };
+        let robust = FootprintParams { ground: GroundRefit::RobustOwnPits, ..params() };
         for p in [params(), robust] {
             let out = analyse_footprints(&h, 25, 25, 0.15, &p);
             for r in 0..25 {
@@ -585,55 +609,42 @@ mod tests {
     }
 
     #[test]
-    fn beside_a_block_wider_than_a_window_open_ground_reads_as_a_pit_unless_pits_need_their_own_window_and_a_robust_ground()
-     {
+    fn beside_a_block_wider_than_a_window_only_the_robust_refit_with_own_window_pits_marks_no_ground() {
         let h = large_block();
         let block = |i: usize| (11..20).contains(&(i / 31)) && (11..20).contains(&(i % 31));
-        // Windows centred on the block's edge refit their ground onto the block, and the open
-        // ground beside it reads as a pit.
-        let any = analyse_footprints(&h, 31, 31, 0.15, &params());
-        let own = FootprintParams { pits_in_own_window: true, ..params() };
-        let out = analyse_footprints(&h, 31, 31, 0.15, &own);
+        let with = |ground: GroundRefit| {
+            analyse_footprints(&h, 31, 31, 0.15, &FootprintParams { ground, ..params() })
+        };
         let ground =
             |o: &FootprintLayers| (0..31 * 31).filter(|&i| o.obstacle[i] && !block(i)).collect::<Vec<_>>();
-        let (before, after) = (ground(&any), ground(&out));
-        assert!(after.iter().all(|i| before.contains(i)), "the option only removes pits");
-        assert!(
-            after.len() + 10 <= before.len(),
-            "{} ground cells marked, {} before",
-            after.len(),
-            before.len()
-        );
-        // The block's rim still stands out of the ground around it.
-        for k in 11..20 {
-            assert!(out.obstacle[11 * 31 + k] && out.obstacle[19 * 31 + k], "rim at column {k}");
-        }
-        // With the ground refitted robustly, none is: the ground beside the block is found in
-        // every window, and only the block stands out.
-        let robust = FootprintParams { robust_ground: true, ..own };
-        let out = analyse_footprints(&h, 31, 31, 0.15, &robust);
+        // Windows centred on the block's edge keep a plane tilted between block and ground (or
+        // refit onto the block), and the open ground beside it reads as a pit.
+        let whole = ground(&with(GroundRefit::WholeWindow));
+        assert!(whole.len() >= 10, "{} ground cells marked", whole.len());
+        // The robust refit alone takes the block as the ground of the windows on it: more
+        // ground cells read low.
+        assert!(ground(&with(GroundRefit::Robust)).len() > whole.len());
+        // With pits only in their own window too, the ground beside the block is found in every
+        // window and only the block stands out, its rim all round.
+        let out = with(GroundRefit::RobustOwnPits);
         assert!(ground(&out).is_empty(), "ground cells marked: {:?}", ground(&out));
         for k in 11..20 {
             assert!(out.obstacle[11 * 31 + k] && out.obstacle[19 * 31 + k], "rim at column {k}");
             assert!(out.obstacle[k * 31 + 11] && out.obstacle[k * 31 + 19], "rim at row {k}");
         }
-        // Alone, the robust refit takes the block as the ground of the windows on it.
-        let alone =
-            analyse_footprints(&h, 31, 31, 0.15, &FootprintParams { robust_ground: true, ..params() });
-        assert!(ground(&alone).len() > before.len());
-        // A real pit is low in its own window.
+        // A real pit is low in its own window, whichever refit.
         let mut pit = grid(25, 25, |_, _| 0.0);
         for r in 11..14 {
             for c in 11..14 {
                 pit[r * 25 + c] = -0.3;
             }
         }
-        for p in [own, robust] {
-            let out = analyse_footprints(&pit, 25, 25, 0.15, &p);
+        for g in [GroundRefit::WholeWindow, GroundRefit::Robust, GroundRefit::RobustOwnPits] {
+            let out = analyse_footprints(&pit, 25, 25, 0.15, &FootprintParams { ground: g, ..params() });
             for r in 0..25 {
                 for c in 0..25 {
                     let inside = (11..14).contains(&r) && (11..14).contains(&c);
-                    assert_eq!(out.obstacle[r * 25 + c], inside, "cell ({c}, {r}) {p:?}");
+                    assert_eq!(out.obstacle[r * 25 + c], inside, "cell ({c}, {r}) {g:?}");
                 }
             }
         }

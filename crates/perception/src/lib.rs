@@ -31,6 +31,7 @@ pub use cobstacle::{
     obstacle_regions, segment_intersection, segments_intersect,
 };
 pub use config::{DensityConfig, HazardHeight, RangeNoise, SensorNoise, TerrainConfig};
+pub use footprint::GroundRefit;
 pub use elevation::{ElevationMap, world_points};
 pub use error::PerceptionError;
 pub use evaluation::{TerrainEvalFigures, TrueRock, evaluate_terrain};

@@ -8,7 +8,7 @@
 use crate::params::{Field, Param, Unit};
 use crate::terrain_model::{HAZARD_MARGIN, T_GRID_RESOLUTION, TOP_HAZARD_MARGIN};
 use rovernav_core::RoverConfig;
-use rovernav_perception::{HazardHeight, TerrainConfig};
+use rovernav_perception::{GroundRefit, HazardHeight, TerrainConfig};
 
 /// Declares a group of parameters: the struct with each field's doc, its [`Default`], and the
 /// group's rows of the mission table, each parameter written once as
@@ -73,14 +73,10 @@ param_group! {
         range_buffer: f64 = 1.0, "range_buffer_m", Metres, Real,
             "buffer left inside the wedge's far radius when a subpath is cut";
         /// Heading error above which the rover turns in place before driving (rad): the path
-        /// execution of section 3 drives arcs only for small heading errors.
+        /// execution of section 3 drives arcs only for small heading errors (20 deg measured
+        /// more contacts: wider arcs swing the body off the subpath).
         turn_threshold: f64 = 10f64.to_radians(), "turn_threshold_deg", Degrees, Real,
             "heading error above which the rover turns in place before driving";
-        /// How much closer than `d_reach` a node must be to leave boundary following (m); 0, the
-        /// default, is the paper's leaving condition d(V, T) < d_reach (0.1 m measured no
-        /// better).
-        leave_margin: f64 = 0.0, "leave_margin_m", Metres, Real,
-            "how much closer than d_reach a node must be to leave boundary following";
         /// Angular margin inside the conglomerate wedge's bounding rays for "interior" (rad;
         /// section 2.2's int(W)).
         interior_angle: f64 = 4f64.to_radians(), "interior_angle_deg", Degrees, Real,
@@ -95,50 +91,22 @@ param_group! {
         /// only where the new view has not sensed their ground again.
         carry_margin: f64 = 0.2, "carry_margin_m", Metres, Real,
             "margin beyond near_visible_m within which the last view's C-obstacles always stay";
-        /// Radius the C-obstacles are grown by before the safety buffer (m); 0, the default,
-        /// takes the rover's circumscribed radius, as the paper's disc rover. Half the rover's
-        /// width lets the rover's disc through narrower gaps and leaves turning to the safety
-        /// layer's body-outline check (measured: more arrivals, twice the contacts).
-        growth_radius: f64 = 0.0, "growth_radius_m", Metres, Real,
-            "radius C-obstacles are grown by before the safety buffer (0: the rover's circumscribed radius)";
-        /// Boundary following on the near side of the boundary (1, the default): d_reach over
-        /// the boundary vertices the rover sees across free space, a way to a leaving node only
-        /// over sensed ground, and boundary following kept across an escape. 0: d_reach over
-        /// every vertex of the blocking obstacle in view, far side included, and an escape
-        /// restarts from motion-to-goal.
-        near_side_reach: bool = true, "near_side_reach", Switch, Bool,
-            "1: d_reach over the boundary vertices seen across free space, leaving only over sensed ground, boundary following kept across an escape; 0: d_reach over every boundary vertex in view";
-        /// Mast wedges at the cameras' full resolution (1) instead of the subsampled navigation
-        /// image (0, the default): sixteen times the rays at the same range noise per ray, at
-        /// twice the capture time (measured: more timeouts than it saves length).
-        fine_mast: bool = false, "fine_mast", Switch, Bool,
-            "1: mast wedges at the cameras' full resolution (16x the rays, twice the capture time); 0: the subsampled navigation image";
-        /// C-obstacle cells below the ground plane count as pits only in the window centred on
-        /// them (1, the default) rather than in any window (0): beside a large rock the
-        /// window's ground refits onto the rock and the open ground next to it reads as a pit,
-        /// widening the C-obstacle by up to a metre.
-        pits_in_own_window: bool = true, "pits_in_own_window", Switch, Bool,
-            "1: a C-obstacle cell below the ground plane is a pit only in the window centred on it (beside a large rock the ground refits onto the rock); 0: in any window";
-        /// The C-obstacle model's windows take as ground the refit holding the most cells, from
-        /// the whole-window plane or from level planes at the quartile heights (1, the
-        /// default), not only the refit from the whole-window plane, which beside a large rock
-        /// stays tilted between rock and ground (0). Meant with `pits_in_own_window`: alone it
-        /// takes a rock filling most of a window as the ground.
-        robust_ground: bool = true, "robust_ground", Switch, Bool,
-            "1: a C-obstacle window's ground is the refit holding the most cells (from the whole-window plane or level planes at the quartile heights); 0: the refit from the whole-window plane";
     }
 }
 
 param_group! {
     /// The budgets after which RoverBug asks for help instead of going on.
     Budgets in budgets {
-        /// Steps (sense-plan-act cycles) before asking for help.
+        /// Steps (sense-plan-act cycles) before asking for help: a traverse that has not arrived
+        /// by then is lost in clutter, and asking beats the mission's time limit.
         max_steps: u32 = 200, "max_steps", Count, U32,
             "sense-plan-act steps before asking for help";
-        /// Wedges sensed in all before asking for help.
+        /// Wedges sensed in all before asking for help (the paper's scarce resource: every wedge
+        /// costs capture and stereo time).
         max_wedges: u64 = 300, "max_wedges", Count, U64,
             "wedges sensed in all before asking for help";
-        /// Hazard contacts recorded around one place (within 0.6 m) before asking for help.
+        /// Hazard contacts recorded around one place (within 0.6 m) before asking for help:
+        /// fault protection would stop the rover at the third body contact anyway.
         max_contacts_here: usize = 6, "max_contacts_here", Count, Usize,
             "hazard contacts recorded around one place before asking for help";
         /// Motions refused by the safety check at one place (within 0.3 m) before the escape,
@@ -158,7 +126,8 @@ param_group! {
         safety_clearance_margin: f64 = TOP_HAZARD_MARGIN, "safety_clearance_margin", Fraction, Real,
             "fraction of the belly clearance at which the safety layer (cell tops) marks a step hazard";
         /// Clearance kept between the body outline and a safety-layer hazard cell when a motion
-        /// is checked before it is commanded (m).
+        /// is checked before it is commanded (m): room for the sensed map's error (elevation
+        /// RMSE about 0.02 m) and the drift between steps (0.12 m measured fewer arrivals).
         body_margin: f64 = 0.08, "body_margin_m", Metres, Real,
             "clearance kept between the body outline and a safety-layer hazard cell";
         /// Added to half the rover's width to grow the safety layer's own C-obstacles (m): the
@@ -176,23 +145,6 @@ param_group! {
         /// has been sensed; see the `unseen` module for what it measured).
         unseen_looks: u32 = 2, "unseen_looks", Count, U32,
             "looks at unseen ground under a forward drive's body before the drive is refused (0: drives are not checked for unseen ground)";
-        /// Length of the latest driving (m) over whose swept body the safety layer's hazard
-        /// cells are dropped: the body crossed that ground without a hazard stop. 0, the
-        /// default, disables it (3 m measured no gain on seeds 1..320).
-        swept_memory: f64 = 0.0, "swept_memory_m", Metres, Real,
-            "length of the latest driving over whose swept body safety-layer hazards are dropped (0 disables)";
-        /// Inset of the body outline within which swept ground clears hazard cells (m): room for
-        /// the drift and slip between the recorded poses and the body's true ones.
-        swept_inset: f64 = 0.1, "swept_inset_m", Metres, Real,
-            "inset of the body outline within which swept ground clears safety-layer hazards";
-        /// `pits_in_own_window` for the safety layer (0, the default: measured with it, more
-        /// contacts).
-        safety_pits_in_own_window: bool = false, "safety_pits_in_own_window", Switch, Bool,
-            "pits_in_own_window for the safety layer's hazard cells";
-        /// `robust_ground` for the safety layer (1, the default: on top heights it raises recall
-        /// and halves the false hazards without `safety_pits_in_own_window`).
-        safety_robust_ground: bool = true, "safety_robust_ground", Switch, Bool,
-            "robust_ground for the safety layer's hazard cells";
     }
 }
 
@@ -209,10 +161,12 @@ param_group! {
         /// place and planning gave up (m).
         escape_distance: f64 = 0.4, "escape_distance_m", Metres, Real,
             "straight drive out of a place where safety-layer hazards forbid a full turn";
-        /// Distance driven back along the recorded trail when planning finds no way on (m).
+        /// Distance driven back along the recorded trail when planning finds no way on (m): far
+        /// enough that the next view sees the dead end from outside its C-obstacles' margins.
         retreat_distance: f64 = 1.5, "retreat_distance_m", Metres, Real,
             "distance driven back along the trail when planning finds no way on";
-        /// Retreats from dead ends before planning's give-up stands.
+        /// Retreats from dead ends before planning's give-up stands: each records a dead end, and
+        /// unbounded they would shuttle until the time limit.
         max_retreats: u32 = 5, "max_retreats", Count, U32,
             "retreats from dead ends before planning's give-up stands";
         /// How much farther from the goal than d_reach (m) boundary following may have led
@@ -249,7 +203,12 @@ impl RoverBugConfig {
 }
 
 /// The step/slope model behind RoverBug's C-obstacles: cell means over one sensing position's
-/// wedges, with hazard limits below the rover's true limits, as the grid navigators use.
+/// wedges, with hazard limits below the rover's true limits, grown by the rover's circumscribed
+/// radius (the paper's disc rover) plus the safety buffer. A hazardous window's ground is
+/// refitted robustly and low cells are pits only in their own window
+/// ([`GroundRefit::RobustOwnPits`]): beside a rock wider than the window the whole-window
+/// refit read the open ground as a pit, widening the C-obstacle by up to a metre (seeds
+/// 161..320: 148 / 3 / 150 clean / with contacts / reached against 134 / 5 / 137).
 pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainConfig {
     let paper = &config.paper;
     TerrainConfig {
@@ -258,15 +217,15 @@ pub fn c_obstacle_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> Terra
         clearance: rover.clearance * paper.clearance_margin,
         max_tilt: rover.max_tilt * HAZARD_MARGIN,
         safety_buffer: paper.safety_buffer,
-        rover_radius: if paper.growth_radius > 0.0 { paper.growth_radius } else { rover.radius() },
-        pits_in_own_window: paper.pits_in_own_window,
-        robust_ground: paper.robust_ground,
+        ground: GroundRefit::RobustOwnPits,
         ..TerrainConfig::for_rover(rover)
     }
 }
 
 /// The safety layer's model, kept across steps: top heights, which do not lose a small rock's
-/// height as cell means do, on the grid navigators' finer cells.
+/// height as cell means do, on the grid navigators' finer cells, with the robust ground refit
+/// ([`GroundRefit::Robust`]: it halves the layer's false hazards; with pits only in their own
+/// window as well, seeds 1..20 gave 16 / 1 / 16 against 20 / 0 / 20).
 pub fn safety_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainConfig {
     TerrainConfig {
         cols: 121,
@@ -274,8 +233,7 @@ pub fn safety_terrain(rover: &RoverConfig, config: &RoverBugConfig) -> TerrainCo
         resolution: T_GRID_RESOLUTION,
         hazard_height: HazardHeight::Top,
         clearance: rover.clearance * config.safety.safety_clearance_margin,
-        pits_in_own_window: config.safety.safety_pits_in_own_window,
-        robust_ground: config.safety.safety_robust_ground,
+        ground: GroundRefit::Robust,
         ..c_obstacle_terrain(rover, config)
     }
 }

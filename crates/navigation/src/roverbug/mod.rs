@@ -109,9 +109,6 @@ pub struct RoverBug {
     been: Vec<Point2>,
     /// Positions the rover has stood at (estimate), oldest first: ground its body has crossed.
     trail: Vec<Point2>,
-    /// Body poses along the latest driving (estimate), oldest first, each with the distance
-    /// driven up to it: ground the body covered without a hazard stop.
-    swept: VecDeque<(Pose2, f64)>,
     /// Where planning found no way on: recorded as small C-obstacles so that no later subpath
     /// leads back into the same dead end.
     dead_ends: Vec<CObstacle>,
@@ -153,7 +150,6 @@ impl RoverBug {
             visited: Vec::new(),
             been: Vec::new(),
             trail: Vec::new(),
-            swept: VecDeque::new(),
             dead_ends: Vec::new(),
             retreats: 0,
             reversing: false,
@@ -215,16 +211,11 @@ impl Navigator for RoverBug {
             self.waypoints.clear();
             // The edge of the terrain stops the wheels like a hazard does: both are recorded.
             let blocked = why.starts_with("hazard") || why.starts_with("left the terrain");
-            if blocked {
-                // The ground of a stopped motion is no evidence of safe ground.
-                self.swept.clear();
-            }
             if blocked && !self.backing_out {
                 return self.back_out(pose);
             }
         }
         self.backing_out = false;
-        self.record_swept(pose);
         if !self.reversing && self.trail.last().is_none_or(|p| p.dist(x) > 0.05) {
             self.trail.push(x);
         }

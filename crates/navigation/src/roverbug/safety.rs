@@ -20,9 +20,6 @@
 use super::{CObstacle, Grid2, Point2, Pose2, RoverBug, angle_diff};
 use std::f64::consts::PI;
 
-/// Spacing of the body poses recorded along a drive or a turn (m, and rad for turns).
-const SWEPT_STEP: f64 = 0.05;
-
 impl RoverBug {
     /// The safety layer's hazard cells whose own points rise above (or fall below) the median
     /// height of the sensed cells within the footprint radius by a fraction of the layer's step
@@ -31,7 +28,6 @@ impl RoverBug {
     /// those would pin the rover in place for nothing. The fraction stays well below one: the
     /// wheels may stand lower than the median ground, so a rock that reads a little under the
     /// limit above it can still touch the belly. Slope hazards are left to the C-obstacles.
-    /// Ground the body has just crossed without a hazard stop is cleared (see `clear_swept`).
     pub(super) fn confirm_hazards(&self) -> Option<Grid2<bool>> {
         let safety = self.safety.as_ref()?;
         let layers = safety.layers();
@@ -66,7 +62,6 @@ impl RoverBug {
                 *out.get_mut(c, r) = stands_out;
             }
         }
-        self.clear_swept(&mut out);
         Some(out)
     }
 
@@ -159,54 +154,6 @@ impl RoverBug {
                 .motion_hazards(pose, &Self::turn_poses(pose, error - error.signum() * 2.0 * PI))
                 .is_empty();
         turn_ok && self.motion_hazards(pose, &Self::arc_poses(turned, d.norm(), 0.0)).is_empty()
-    }
-
-    /// Records the body poses from the last recorded one to `pose`, interpolated
-    /// [`SWEPT_STEP`] apart, and forgets those more than `swept_memory` of driving back.
-    pub(super) fn record_swept(&mut self, pose: Pose2) {
-        if self.config.safety.swept_memory <= 0.0 {
-            return;
-        }
-        let Some(&(last, driven)) = self.swept.back() else {
-            self.swept.push_back((pose, 0.0));
-            return;
-        };
-        let distance = last.position().dist(pose.position());
-        let turn = angle_diff(pose.yaw, last.yaw);
-        let n = (distance.max(turn.abs()) / SWEPT_STEP).ceil() as usize;
-        for k in 1..=n {
-            let t = k as f64 / n as f64;
-            let p = last.position().add(pose.position().sub(last.position()).scale(t));
-            self.swept.push_back((Pose2::new(p.x, p.y, last.yaw + t * turn), driven + t * distance));
-        }
-        let latest = driven + distance;
-        while self.swept.front().is_some_and(|&(_, d)| d < latest - self.config.safety.swept_memory) {
-            self.swept.pop_front();
-        }
-    }
-
-    /// Clears the hazard cells of `mask` whose centres the body, inset by `swept_inset`, has
-    /// covered along the recorded poses.
-    pub(super) fn clear_swept(&self, mask: &mut Grid2<bool>) {
-        let g = mask.geometry;
-        let half_l = 0.5 * self.rover.length - self.config.safety.swept_inset;
-        let half_w = 0.5 * self.rover.width - self.config.safety.swept_inset;
-        if half_l <= 0.0 || half_w <= 0.0 {
-            return;
-        }
-        let reach = half_l.hypot(half_w);
-        for &(pose, _) in &self.swept {
-            let (cols, rows) = cells_around(&g, pose.position(), reach);
-            for r in rows {
-                for c in cols.clone() {
-                    let (cx, cy) = g.center(c, r);
-                    let b = pose.inverse_transform(Point2::new(cx, cy));
-                    if b.x.abs() <= half_l && b.y.abs() <= half_w {
-                        *mask.get_mut(c, r) = false;
-                    }
-                }
-            }
-        }
     }
 }
 

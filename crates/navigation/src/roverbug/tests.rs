@@ -48,24 +48,19 @@ fn ltg_path_around_a_square_is_the_hand_computed_tangent_path() {
 }
 
 #[test]
-fn d_reach_on_the_near_side_leaves_out_the_vertices_seen_over_the_obstacle() {
+fn d_reach_is_taken_on_the_near_side_of_the_boundary() {
     // Square [2,3]x[-0.5,0.5] between the rover (0,0) and the goal (4,0). Its near corners
     // (2,±0.5) are seen across free space, 2.0616 m from the goal; its far corners (3,±0.5)
     // are in view too (a mast sees over low rocks) but only past the square, 1.1180 m from
-    // the goal. V_loop, the extreme vertex in the negative sense, is the near corner
-    // (2,-0.5) whichever vertices it is taken among here; the ring scenario
-    // `ring_with_unseen_looks_v_loop_on_the_far_side_never_closed_the_loop` is the one that
-    // tells the near side from all of them.
+    // the goal. d_reach is the near corners' distance, not the far ones'; the target is the
+    // near corner in the positive sense and V_loop, the extreme vertex in the negative sense,
+    // the other near corner (the ring scenario `goal_inside_a_ring_of_rocks_is_unreachable`
+    // is the one that tells a near-side V_loop from one among all vertices).
     let goal = Point2::new(4.0, 0.0);
     let x = Point2::new(0.0, 0.0);
-    let mut bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
-    bug.config.paper.near_side_reach = false;
+    let bug = bug_with(vec![square(2.5, 0.0, 0.5)]);
     let (path, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
     assert!(path.last().unwrap().dist(Point2::new(2.0, 0.5)) < 1e-9, "{path:?}");
-    assert!((d_reach - 1.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
-    assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
-    bug.config.paper.near_side_reach = true;
-    let (_, d_reach, v_loop) = bug.silhouette(x, goal, 1.0, false).expect("a boundary vertex");
     assert!((d_reach - 2.0f64.hypot(0.5)).abs() < 1e-9, "{d_reach}");
     assert!(v_loop.dist(Point2::new(2.0, -0.5)) < 1e-9, "{v_loop:?}");
 }
@@ -207,41 +202,12 @@ fn motion_check_follows_the_body_outline() {
 }
 
 #[test]
-fn ground_the_body_just_crossed_clears_hazard_cells_inside_the_inset_outline_only() {
-    // Body 0.8 x 0.6 m inset by 0.1 m: 0.3 m ahead and behind, 0.2 m to either side of each
-    // recorded pose. The rover drove from x = -1 to x = 1 along y = 0.
-    let cells = [(0.05, 0.05), (0.05, 0.35), (1.45, 0.05), (-1.25, 0.05)];
-    let mut bug = bug_with_hazards(&cells);
-    bug.config.safety.swept_memory = 3.0;
-    bug.record_swept(Pose2::new(-1.0, 0.0, 0.0));
-    bug.record_swept(Pose2::new(1.0, 0.0, 0.0));
-    let mut mask = bug.safety_hazard.clone().unwrap();
-    bug.clear_swept(&mut mask);
-    let hazard = |x: f64, y: f64| {
-        let (c, r) = mask.geometry.cell_of(x, y).unwrap();
-        *mask.get(c, r)
-    };
-    assert!(!hazard(0.05, 0.05), "on the track, under the body");
-    assert!(hazard(0.05, 0.35), "beside the inset outline");
-    assert!(hazard(1.45, 0.05), "ahead of the body's last pose");
-    assert!(!hazard(-1.25, 0.05), "under the body's first pose");
-    // Only the latest `swept_memory` of driving counts: 3 m more forgets the start.
-    bug.record_swept(Pose2::new(4.0, 0.0, 0.0));
-    let mut mask = bug.safety_hazard.clone().unwrap();
-    bug.clear_swept(&mut mask);
-    let (c, r) = mask.geometry.cell_of(-1.25, 0.05).unwrap();
-    assert!(*mask.get(c, r), "forgotten ground keeps its hazard");
-}
-
-#[test]
-fn growth_radius_replaces_the_circumscribed_radius_and_keeps_the_safety_buffer() {
+fn c_obstacles_grow_by_the_circumscribed_radius_plus_the_safety_buffer() {
+    // Paper 000 section 2: the rover as its circumscribed disc; the 0.8 x 0.6 m body's radius
+    // is 0.5 m, and the default buffer 0.1 m.
     let rover = RoverConfig::default();
-    let paper = c_obstacle_terrain(&rover, &RoverBugConfig::default());
-    // The 0.8 x 0.6 m body's circumscribed radius is 0.5 m.
-    assert!((paper.growth() - (0.5 * 0.8f64.hypot(0.6) + 0.1)).abs() < 1e-12);
-    let mut config = RoverBugConfig::default();
-    config.paper.growth_radius = 0.3;
-    assert!((c_obstacle_terrain(&rover, &config).growth() - 0.4).abs() < 1e-12);
+    let terrain = c_obstacle_terrain(&rover, &RoverBugConfig::default());
+    assert!((terrain.growth() - (0.5 * 0.8f64.hypot(0.6) + 0.1)).abs() < 1e-12);
 }
 
 /// A 45-degree mast wedge along +x from the origin, sensed from 1 to 5 m.

@@ -41,11 +41,11 @@ impl RoverBug {
         NavCommand::Sense(requests)
     }
 
-    /// The mast wedge (navigation or full-resolution image, per `fine_mast`) centred on the
+    /// The mast wedge (the navigation image) centred on the
     /// world bearing `bearing`.
     pub(super) fn mast_at(&self, pose: Pose2, bearing: f64) -> SenseRequest {
         let pan = angle_diff(bearing, pose.yaw);
-        if self.config.paper.fine_mast { SenseRequest::MastFine { pan } } else { SenseRequest::Mast { pan } }
+        SenseRequest::Mast { pan }
     }
 
     /// The sensing that opens a step in the current mode.

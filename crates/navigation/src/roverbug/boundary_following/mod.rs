@@ -159,12 +159,11 @@ impl RoverBug {
         if !self.interior(target) || (virtual_mode && !self.free_past(x, target)) {
             return None;
         }
-        // d_reach, "the closest distance to T encountered so far on ∂O": on the near side too
-        // (`near_side_reach`). Over every boundary vertex in view, far side included, it can
-        // be metres nearer the goal than any boundary the rover follows in a rock field, so
-        // that the rover never leaves.
-        let reach_pool = if self.config.paper.near_side_reach { &near } else { &nodes };
-        let d_reach = reach_pool.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
+        // d_reach, "the closest distance to T encountered so far on ∂O": on the near side too.
+        // Over every boundary vertex in view, far side included, it can be metres nearer the
+        // goal than any boundary the rover follows in a rock field, so that the rover never
+        // leaves.
+        let d_reach = near.iter().map(|&i| ltg.nodes[i].p.dist(goal)).fold(x.dist(goal), f64::min);
         // V_loop lies on the near side of the boundary (paper 000 section 2.2): the most extreme
         // near vertex in the negative sense. Taken among all, it can lie on the far side of an
         // encircling obstacle, which the rover following the near side never comes back to.

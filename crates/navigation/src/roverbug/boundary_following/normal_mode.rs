@@ -24,17 +24,15 @@ impl RoverBug {
         let ltg = self.build_ltg(x, goal);
         // Leaving condition: a reachable node of G1 closer to the goal than d_reach.
         let bound = x.dist(goal).min(self.d_leave.unwrap_or(f64::INFINITY));
-        let limit = d_reach - self.config.paper.leave_margin;
         let leave = self.search(&ltg, goal, &|n: &Node| {
-            n.arrival || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < limit)
+            n.arrival || (n.p.dist(goal) <= bound + 1e-9 && n.p.dist(goal) < d_reach)
         });
         // The way to a node that beats d_reach must lie on sensed ground: beyond the cut radius
         // the tangent graph also crosses ground no image covered, where an encircling
         // obstacle's rocks have no C-obstacles, and a leave through it would restart boundary
         // following (with a new V_loop) each time the rover drives up to it.
         let leave = leave.filter(|path| {
-            !self.config.paper.near_side_reach
-                || path.windows(2).all(|w| self.segment_sensed(ltg.nodes[w[0]].p, ltg.nodes[w[1]].p))
+            path.windows(2).all(|w| self.segment_sensed(ltg.nodes[w[0]].p, ltg.nodes[w[1]].p))
         });
         if let Some(path) = leave {
             let end = ltg.nodes[*path.last().expect("non-empty path")];

@@ -33,7 +33,7 @@ impl RoverBug {
         // The short drive out is a motion, not a decision of the planner: boundary following
         // goes on in the same sense toward the same V_loop (a restart would choose the sense
         // afresh, and inside a U-shaped trap the shorter side flips from place to place).
-        if !self.config.paper.near_side_reach || !matches!(self.mode, Mode::Normal { .. }) {
+        if !matches!(self.mode, Mode::Normal { .. }) {
             self.mode = Mode::MotionToGoal;
         }
         self.last_motion = Some(distance.signum());
