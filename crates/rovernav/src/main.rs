@@ -5,6 +5,7 @@ mod campaign;
 mod distributed;
 mod eval_horizon;
 mod eval_localization;
+mod eval_stereo;
 mod eval_terrain;
 mod interactive;
 mod output;
@@ -62,6 +63,8 @@ enum EvalCommand {
     Localization(eval_localization::EvalLocalizationArgs),
     /// The sensing-horizon reference: the path ratio of an ideal rover that knows only what lies within its sensing range.
     Horizon(eval_horizon::EvalHorizonArgs),
+    /// Stereo: correlated range against the true range on rendered Mars-yard pairs.
+    Stereo(eval_stereo::EvalStereoArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -167,6 +170,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
         Some(Command::Eval(EvalCommand::Horizon(args))) => eval_horizon::run(args),
+        Some(Command::Eval(EvalCommand::Stereo(args))) => eval_stereo::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),
