@@ -14,17 +14,17 @@
 //!   sigma (1.4826 x the median absolute deviation) and the predicted sigma, so the error's
 //!   growth with range can be read against the model.
 
+use nalgebra::{Point2, Point3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rovernav_executive::{Mission, build_world};
-use nalgebra::{Point2, Point3};
 use rovernav_sim::render::{Label, pose_isometry};
-use rovernav_vision::camera::Movable;
-use rovernav_vision::{Cahv, CameraModel};
 use rovernav_sim::sensors::RangeGeometry;
 use rovernav_sim::stereo_range::{self, StereoImaging};
 use rovernav_sim::{HeightField, SensorModel, Simulator};
+use rovernav_vision::camera::Movable;
+use rovernav_vision::{Cahv, CameraModel};
 use serde::Serialize;
 
 use crate::eval_terrain::parse_seed_range;
