@@ -151,7 +151,9 @@ fn seed_errors(seed: u64, imaging: &StereoImaging) -> anyhow::Result<(usize, Vec
         let (left, right) = (capture.rig.left.moved(&pose), capture.rig.right.moved(&pose));
         let width = capture.left.width();
         for (i, &truth_range) in capture.left.range.iter().enumerate() {
-            if !truth_range.is_finite() || capture.left.labels[i] == Label::Sky {
+            // The ray caster sees the DEM only: sky and the level ground the renderer draws
+            // beyond the DEM's edge are not part of the yard.
+            if !truth_range.is_finite() || matches!(capture.left.labels[i], Label::Sky | Label::FarGround) {
                 continue;
             }
             let pixel = Point2::new((i % width) as f64, (i / width) as f64);

@@ -78,7 +78,13 @@ impl Default for StereoImaging {
             ls_deg: 0.0,
             atmosphere: Atmosphere::default(),
             sigma_d_px: stereo::range::DEFAULT_SIGMA_D_PX,
-            correlator: StereoParams::default(),
+            // A left-right tolerance of half a pixel: next to an occluding rock the census
+            // window drags the rock's disparity onto the ground behind it, and a range blunder
+            // there reads as an obstacle or hides one. `rovernav eval stereo` seeds 3..8: 0.8 %
+            // of valid pixels beyond 3 sigma and 95.9 % of the pixels both cameras see ranged,
+            // against 1.3 % and 99.0 % at the Middlebury-tuned 1 px (which counts rejected
+            // pixels as errors, as a rover must not).
+            correlator: StereoParams { lr_tolerance: 0.5, ..StereoParams::default() },
             // 256 / 4 = 64 points across, about the 60 rays of the ray-cast navigation image:
             // the navigators get the same density (and cost) from either source.
             point_stride: 4,
