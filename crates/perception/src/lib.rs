@@ -31,9 +31,9 @@ pub use cobstacle::{
     obstacle_regions, segment_intersection, segments_intersect,
 };
 pub use config::{DensityConfig, HazardHeight, RangeNoise, SensorNoise, TerrainConfig};
-pub use footprint::GroundRefit;
 pub use elevation::{ElevationMap, world_points};
 pub use error::PerceptionError;
 pub use evaluation::{TerrainEvalFigures, TrueRock, evaluate_terrain};
 pub use evaluator::{MoreDataRequest, TerrainEvaluator, TerrainLayers, assess_cells};
+pub use footprint::GroundRefit;
 pub use hull::convex_hull;

@@ -12,4 +12,4 @@ pub mod image;
 pub mod rectify;
 pub mod stereo;
 
-pub use camera::{CameraModel, Cahv, Ray};
+pub use camera::{Cahv, CameraModel, Ray};
