@@ -11,5 +11,6 @@ pub mod codec;
 pub mod image;
 pub mod rectify;
 pub mod stereo;
+pub mod tracking;
 
 pub use camera::{Cahv, CameraModel, Ray};
