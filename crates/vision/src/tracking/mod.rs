@@ -149,6 +149,18 @@ pub struct TrackParams {
     pub jump_gate: f64,
     /// Search window sizing.
     pub window: WindowParams,
+    /// Where the template comes from at each step.
+    pub template_source: TemplateSource,
+}
+
+/// Where each step's template is cut from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TemplateSource {
+    /// The last tracked image (follows appearance changes; subpixel errors add up step by step).
+    LastImage,
+    /// The designation image, warped for the whole change of range and roll since (no drift;
+    /// suffers when the viewpoint changes the target's look).
+    Designation,
 }
 
 impl Default for TrackParams {
@@ -161,6 +173,7 @@ impl Default for TrackParams {
             exclusion_px: 4.0,
             jump_gate: 3.0,
             window: WindowParams::default(),
+            template_source: TemplateSource::LastImage,
         }
     }
 }
@@ -317,17 +330,20 @@ impl Tracker {
         judge(p, peak, prediction, *warp)
     }
 
-    /// Takes a successful match as the new reference: the target's pixel, its new range and
-    /// position (from point stereo), and the camera roll of `image`.
+    /// Takes a successful match: the target's pixel, its new range and position (from point
+    /// stereo), and the camera roll of `image`; with [`TemplateSource::LastImage`] the next
+    /// template is cut from `image`.
     pub fn accept(&mut self, image: &GreyF32, target: Target, roll_rad: f64) -> Result<(), TrackError> {
         if !(target.range_m.is_finite() && target.range_m > 0.0) {
             return Err(TrackError::Parameter(format!("range {} m must be positive", target.range_m)));
         }
-        let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
-        self.reference = reference;
-        self.reference_pixel = pixel;
-        self.reference_range_m = target.range_m;
-        self.reference_roll_rad = roll_rad;
+        if self.params.template_source == TemplateSource::LastImage {
+            let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
+            self.reference = reference;
+            self.reference_pixel = pixel;
+            self.reference_range_m = target.range_m;
+            self.reference_roll_rad = roll_rad;
+        }
         self.target = target;
         Ok(())
     }

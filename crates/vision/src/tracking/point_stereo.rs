@@ -28,6 +28,10 @@ pub struct PointStereoParams {
     pub max_disparity: f64,
     /// Lowest acceptable correlation score.
     pub min_score: f32,
+    /// Largest accepted ratio of the best separate peak (beyond `exclusion_px`) to the best.
+    pub max_second_ratio: f32,
+    /// Radius (px) about the best disparity in which no second peak is sought.
+    pub exclusion_px: f64,
     /// Disparity standard deviation (px) for the range uncertainty.
     pub sigma_d_px: f64,
 }
@@ -39,6 +43,8 @@ impl Default for PointStereoParams {
             min_disparity: 1.0,
             max_disparity: 200.0,
             min_score: 0.7,
+            max_second_ratio: 0.9,
+            exclusion_px: 3.0,
             sigma_d_px: crate::stereo::range::DEFAULT_SIGMA_D_PX,
         }
     }
@@ -95,11 +101,17 @@ pub fn point_stereo(
     let x_hi = (pixel.x - params.min_disparity).ceil() as i64;
     let window = Window { x_min: x_lo, x_max: x_hi, y_min: h as i64, y_max: h as i64 };
     let map = score_map(&band, &template, &window, Centring::ZeroMean)?;
-    let peak = find_peak(&map, 0.0).ok_or(TrackError::OutOfView)?;
+    let peak = find_peak(&map, params.exclusion_px).ok_or(TrackError::OutOfView)?;
     if peak.score < params.min_score {
         return Err(TrackError::NoStereoMatch(format!(
             "best score {:.3} < {}",
             peak.score, params.min_score
+        )));
+    }
+    if peak.second > params.max_second_ratio * peak.score {
+        return Err(TrackError::NoStereoMatch(format!(
+            "ambiguous: second peak {:.3} against {:.3}",
+            peak.second, peak.score
         )));
     }
     if peak.on_edge {
