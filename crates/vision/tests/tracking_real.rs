@@ -236,3 +236,68 @@ fn ncc_score_map_matches_imageproc() {
     let best = zero.scores.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0;
     assert_eq!((zero.x0 + (best % zero.width) as i64, zero.y0 + (best / zero.width) as i64), (45, 42));
 }
+
+const TSUKUBA: &str = "stereo/middlebury/tsukuba";
+
+#[test]
+fn point_stereo_on_middlebury_tsukuba_matches_ground_truth() {
+    use rovernav_vision::Cahv;
+    use rovernav_vision::stereo::StereoRig;
+    use rovernav_vision::tracking::{PointStereoParams, point_stereo};
+    let (Some(l), Some(r), Some(t)) = (
+        data_file(&format!("{TSUKUBA}/im3.png")),
+        data_file(&format!("{TSUKUBA}/im4.png")),
+        data_file(&format!("{TSUKUBA}/disp3.pgm")),
+    ) else {
+        return;
+    };
+    let left = codec::read_image(l).unwrap().to_grey_f32();
+    let right = codec::read_image(r).unwrap().to_grey_f32();
+    let truth = codec::read_image(t).unwrap().to_grey_f32();
+    let (w, h) = (left.width() as usize, left.height() as usize);
+    // Any rectified rig will do: the disparity is what is checked. f = 600 px, b = 0.1 m.
+    let cam = |x: f64| nalgebra::Vector3::new(0.0, -x, 0.0);
+    let make = |c| {
+        Cahv::from_intrinsics(
+            cam(c),
+            nalgebra::Vector3::x(),
+            -nalgebra::Vector3::y(),
+            600.0,
+            600.0,
+            192.0,
+            144.0,
+            w,
+            h,
+        )
+    };
+    let rig = StereoRig::new(make(0.0), make(0.1)).unwrap();
+    let params = PointStereoParams { max_disparity: 20.0, ..PointStereoParams::default() };
+    let (mut ok, mut ranged, mut tried, mut sq) = (0, 0, 0, 0.0f64);
+    for y in (24..h - 24).step_by(12) {
+        for x in (40..w - 24).step_by(12) {
+            // Only where the truth is known and constant over the window (no depth edge).
+            let d0 = truth.get_pixel(x as u32, y as u32)[0];
+            let flat = (0..15u32)
+                .all(|j| (0..15u32).all(|i| truth.get_pixel(x as u32 + i - 7, y as u32 + j - 7)[0] == d0));
+            if d0 == 0.0 || !flat {
+                continue;
+            }
+            tried += 1;
+            let Ok(pr) = point_stereo(&rig, &left, &right, Point2::new(x as f64, y as f64), &params) else {
+                continue;
+            };
+            ranged += 1;
+            let err = pr.disparity - d0 as f64 / 16.0;
+            sq += err * err;
+            ok += (err.abs() <= 1.0) as usize;
+            // The range follows the disparity: z = f b / d.
+            assert!((pr.depth_m - 60.0 / pr.disparity).abs() < 1e-9);
+        }
+    }
+    let rms = (sq / ranged.max(1) as f64).sqrt();
+    eprintln!(
+        "Tsukuba point stereo: {ranged}/{tried} ranged, {ok} within 1 px of the truth, rms {rms:.2} px"
+    );
+    assert!(tried >= 50, "{tried} test points");
+    assert!(ranged as f64 >= 0.8 * tried as f64 && ok as f64 >= 0.95 * ranged as f64);
+}
