@@ -130,6 +130,39 @@ mod tests {
     }
 
     #[test]
+    fn warp_agrees_with_cahv_cameras_that_approach_and_roll() {
+        // A camera looking along +x at a wall point 10 m away, then 8 m away and rolled by
+        // +7 deg about its axis: wall points near the target must move as the warp says.
+        use crate::camera::{Cahv, CameraModel};
+        use nalgebra::{Point3, Rotation3, Vector3};
+        let cam = |x: f64, roll: f64| {
+            let right = Rotation3::from_axis_angle(&Vector3::x_axis(), roll) * -Vector3::y();
+            Cahv::from_intrinsics(
+                Vector3::new(x, 0.0, 0.0),
+                Vector3::x(),
+                right,
+                500.0,
+                500.0,
+                255.5,
+                255.5,
+                512,
+                512,
+            )
+        };
+        let roll = 7f64.to_radians();
+        let (before, after) = (cam(0.0, 0.0), cam(2.0, roll));
+        let target = Point3::new(10.0, 0.0, 0.0);
+        let warp = TemplateWarp::from_range_and_roll(10.0, 8.0, 0.0, roll);
+        let (c0, c1) = (before.project(&target).unwrap(), after.project(&target).unwrap());
+        for (dy, dz) in [(0.1, 0.0), (0.0, 0.1), (-0.07, 0.04)] {
+            let p = Point3::new(10.0, dy, dz);
+            let (q0, q1) = (before.project(&p).unwrap(), after.project(&p).unwrap());
+            let predicted = warp.forward_offset(q0.x - c0.x, q0.y - c0.y);
+            assert!((predicted.0 - (q1.x - c1.x)).abs() < 1e-9 && (predicted.1 - (q1.y - c1.y)).abs() < 1e-9);
+        }
+    }
+
+    #[test]
     fn resampling_a_linear_ramp_is_exact() {
         // Bilinear interpolation reproduces a linear image: I = 2x + 3y.
         let img = GreyF32::from_fn(50, 50, |x, y| Luma([2.0 * x as f32 + 3.0 * y as f32]));
