@@ -5,12 +5,14 @@ mod campaign;
 mod distributed;
 mod eval_horizon;
 mod eval_localization;
+mod eval_science;
 mod eval_stereo;
 mod eval_terrain;
 mod interactive;
 mod output;
 mod render_cmd;
 mod replay;
+mod science_cmd;
 mod stereo_cmd;
 
 use clap::{Parser, Subcommand};
@@ -53,6 +55,9 @@ enum Command {
     Stereo(stereo_cmd::StereoArgs),
     /// Write what one of the rover's cameras sees of the mission's world (DIR/NAME.png).
     Render(render_cmd::RenderArgs),
+    /// Onboard science (paper 003 section 5): sky masks, cloud and dust-devil detection on image files.
+    #[command(subcommand)]
+    Science(science_cmd::ScienceCommand),
 }
 
 #[derive(Subcommand, Debug)]
@@ -65,6 +70,8 @@ enum EvalCommand {
     Horizon(eval_horizon::EvalHorizonArgs),
     /// Stereo: correlated range against the true range on rendered Mars-yard pairs.
     Stereo(eval_stereo::EvalStereoArgs),
+    /// Onboard science: cloud or dust-devil detection on rendered labelled sets.
+    Science(eval_science::EvalScienceArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -171,6 +178,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),
         Some(Command::Eval(EvalCommand::Horizon(args))) => eval_horizon::run(args),
         Some(Command::Eval(EvalCommand::Stereo(args))) => eval_stereo::run(args),
+        Some(Command::Eval(EvalCommand::Science(args))) => eval_science::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),
@@ -178,6 +186,7 @@ fn main() -> ExitCode {
         Some(Command::Send(args)) => distributed::send(args),
         Some(Command::Stereo(args)) => stereo_cmd::run(args),
         Some(Command::Render(args)) => render_cmd::run(args),
+        Some(Command::Science(cmd)) => science_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

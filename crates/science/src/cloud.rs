@@ -3,14 +3,15 @@
 //! sky ... and then determines if there are high variance regions within the sky."
 //!
 //! Steps (the paper names the two stages; the rest is rovernav's):
-//! 1. The sky from [`crate::sky`], shrunk by a margin below which the horizon's own edge and
+//! 1. The image reduced to the working size and median-filtered (dead pixels); the sky from [`crate::sky`], shrunk by a margin below which the horizon's own edge and
 //!    the hazed skyline would count as variance.
 //! 2. The sky's smooth brightness (brighter towards the horizon and the sun) is removed: a
 //!    cubic surface in (x, y) fitted to the sky by least squares, refitted once without the
 //!    pixels more than 3 robust sigmas off. What remains is the relative residual
 //!    `I / fit - 1`.
-//! 3. A band-pass of the residual (a small box mean minus a large one, both over sky pixels
-//!    only) keeps cloud texture and drops pixel noise and what the fit left of the gradient.
+//! 3. A band-pass of the residual (a small local plane fit minus a large one, both over sky
+//!    pixels only, so a gradient at the image border or the horizon leaves no trace) keeps
+//!    cloud texture and drops pixel noise and what the surface fit left (sun glare).
 //! 4. High-variance regions: the sky is tiled in blocks; a block whose band-pass standard
 //!    deviation exceeds `noise_factor` times the band-pass noise (from the sky's pixel-to-pixel
 //!    differences) and the `min_contrast` floor is high-variance. 4-connected high-variance
@@ -53,7 +54,7 @@ impl Default for CloudParams {
     fn default() -> Self {
         Self {
             max_side: 384,
-            horizon_margin: 0.03,
+            horizon_margin: 0.06,
             small_radius: 2,
             large_radius: 12,
             block: 12,
@@ -102,7 +103,7 @@ pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> Cl
         return none(0.0);
     }
     let f = factor_for(w, h, params.max_side);
-    let p = Plane::reduced(image, f);
+    let p = Plane::prepared(image, f);
     let (pw, ph) = (p.width, p.height);
     let margin = (params.horizon_margin * ph as f32).ceil() as usize;
     // A working pixel is searched when its whole block of image columns is sky to the margin.
@@ -119,8 +120,8 @@ pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> Cl
         return none(searched);
     }
     let Some(residual) = relative_residual(&p, &mask) else { return none(searched) };
-    let small = residual.masked_mean_with(&mask, params.small_radius);
-    let large = residual.masked_mean_with(&mask, params.large_radius);
+    let small = residual.masked_plane_fit(&mask, params.small_radius);
+    let large = residual.masked_plane_fit(&mask, params.large_radius);
     let band: Vec<f32> = small.data.iter().zip(&large.data).map(|(a, b)| a - b).collect();
     // Pixel noise from horizontal neighbour differences inside the sky (sd of one pixel).
     let diffs = (0..ph).flat_map(|y| {

@@ -10,6 +10,7 @@
 pub mod hazard;
 pub mod raycast;
 pub mod render;
+pub mod scenes;
 pub mod sensors;
 pub mod simulator;
 pub mod stereo_range;
