@@ -348,6 +348,61 @@ fn score_dust_devils(args: &EvalScienceArgs, sites: &[Site], n: usize) -> anyhow
 mod tests {
     use super::*;
 
+    fn args(kind: &str, count: usize, size: usize) -> EvalScienceArgs {
+        EvalScienceArgs {
+            kind: kind.into(),
+            count: Some(count),
+            size,
+            seed: 1,
+            budget: 0.1,
+            out: None,
+            json: false,
+            list: false,
+        }
+    }
+
+    #[test]
+    fn sky_mask_agrees_with_the_renderer_labels() {
+        let site = Site::new(5);
+        for index in [0, 1, 2, 3, 20, 21] {
+            let case = clouds::cloud_image(&site, index, 128, 3);
+            let mask = segment_sky(&grey(&case.rendered.image), &SkyParams::default());
+            let agree = (0..128 * 128)
+                .filter(|&i| {
+                    let truth = case.rendered.labels[i] == rovernav_sim::render::Label::Sky;
+                    truth == mask.is_sky((i % 128) as u32, (i / 128) as u32)
+                })
+                .count();
+            assert!(
+                agree as f64 > 0.95 * 128.0 * 128.0,
+                "case {index}: {agree} of {} pixels agree",
+                128 * 128
+            );
+        }
+    }
+
+    #[test]
+    fn small_rendered_sets_are_mostly_right() {
+        let clouds = evaluate(&args("clouds", 20, 128)).unwrap();
+        assert_eq!(clouds.images, 20);
+        assert!(clouds.accuracy >= 0.85, "{clouds:?}");
+        let devils = evaluate(&args("dust-devils", 3, 128)).unwrap();
+        assert!(devils.accuracy >= 0.8, "{devils:?}");
+        assert!(devils.downlink_fraction <= 0.1 + 1e-9);
+        assert!(evaluate(&args("rainbows", 1, 128)).unwrap_err().to_string().contains("--kind"));
+    }
+
+    /// The paper-size sets (`cargo test --release -p rovernav -- --ignored science_targets`).
+    #[test]
+    #[ignore]
+    fn science_targets_on_paper_size_sets() {
+        let clouds = evaluate(&args("clouds", 210, 256)).unwrap();
+        assert!(clouds.accuracy >= 0.93 && clouds.high_contrast_missed == 0, "{clouds:?}");
+        let devils = evaluate(&args("dust-devils", 25, 256)).unwrap();
+        assert_eq!(devils.images, 385);
+        assert!(devils.accuracy >= 0.85, "{devils:?}");
+    }
+
     #[test]
     fn sequence_lengths_match_the_paper() {
         let l = sequence_lengths(25);

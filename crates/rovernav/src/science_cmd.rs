@@ -7,8 +7,8 @@ use image::AnimationDecoder;
 use rovernav_science::{
     CloudParams, DustDevilParams, SkyParams, detect_clouds, detect_dust_devils, segment_sky,
 };
-use rovernav_vision::codec::{read_image, write_png_grey8};
-use rovernav_vision::image::GreyF32;
+use rovernav_vision::codec::{read_image, write_png_grey8, write_png_rgb8};
+use rovernav_vision::image::{GreyF32, Rgb8};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +29,13 @@ pub struct SkyArgs {
     /// Where to write the mask (PNG, 255 = sky).
     #[arg(long)]
     pub out: PathBuf,
+    /// Also write a picture of the image (reduced to `--overlay-width`) with the sky tinted
+    /// blue and the horizon in red.
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
+    /// Width of the overlay picture (pixels).
+    #[arg(long, default_value_t = 1200)]
+    pub overlay_width: u32,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -62,6 +69,10 @@ fn sky(args: SkyArgs) -> anyhow::Result<()> {
     let mask = segment_sky(&image, &SkyParams::default());
     write_png_grey8(&args.out, &mask.to_image())
         .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    if let Some(path) = &args.overlay {
+        let picture = overlay(&image, &mask, args.overlay_width.clamp(16, 8192));
+        write_png_rgb8(path, &picture).with_context(|| format!("{}: cannot write", path.display()))?;
+    }
     let mut rows: Vec<u32> = mask.horizon.clone();
     rows.sort_unstable();
     let pick = |q: f64| rows.get(((rows.len().max(1) - 1) as f64 * q) as usize).copied().unwrap_or(0);
@@ -139,6 +150,40 @@ fn detect(args: DetectArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The image reduced to `width` (block means, stretched between its 1st and 99th percentiles)
+/// with the sky tinted blue and the horizon drawn in red.
+fn overlay(image: &GreyF32, mask: &rovernav_science::SkyMask, width: u32) -> Rgb8 {
+    let (w, h) = image.dimensions();
+    let f = (w.div_ceil(width.max(1))).max(1);
+    let (ow, oh) = (w.div_ceil(f), h.div_ceil(f));
+    let mut values: Vec<f32> = image.pixels().step_by(7).map(|p| p[0]).collect();
+    values.sort_by(f32::total_cmp);
+    let at = |q: f64| values.get(((values.len().max(1) - 1) as f64 * q) as usize).copied().unwrap_or(0.0);
+    let (lo, hi) = (at(0.01), at(0.99).max(at(0.01) + 1e-6));
+    Rgb8::from_fn(ow, oh, |x, y| {
+        let (mut sum, mut n, mut sky) = (0f32, 0f32, 0u32);
+        for yy in y * f..((y + 1) * f).min(h) {
+            for xx in x * f..((x + 1) * f).min(w) {
+                sum += image.get_pixel(xx, yy)[0];
+                n += 1.0;
+                sky += mask.is_sky(xx, yy) as u32;
+            }
+        }
+        let g = ((sum / n.max(1.0) - lo) / (hi - lo) * 255.0).clamp(0.0, 255.0);
+        let col = (x * f + f / 2).min(w - 1) as usize;
+        let line = mask.horizon[col] / f;
+        if mask.horizon[col] > mask.top[col] && mask.horizon[col] < h && (line == y || line + 1 == y) {
+            return image::Rgb([255, 0, 0]);
+        }
+        if 2 * sky >= n as u32 {
+            image::Rgb([(0.6 * g) as u8, (0.7 * g) as u8, (0.5 * g + 120.0).min(255.0) as u8])
+        } else {
+            let v = g as u8;
+            image::Rgb([v, v, v])
+        }
+    })
 }
 
 /// An image file as grey floats; a GIF's first frame.

@@ -191,6 +191,12 @@ pub fn factor_for(width: u32, height: u32, max_side: usize) -> usize {
     (width.max(height) as usize).div_ceil(max_side.max(1)).max(1)
 }
 
+/// The reduction factor that brings the image to at most `max_pixels` pixels.
+pub fn factor_for_area(width: u32, height: u32, max_pixels: usize) -> usize {
+    let ratio = width as f64 * height as f64 / max_pixels.max(1) as f64;
+    (ratio.sqrt().ceil() as usize).max(1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -236,6 +242,8 @@ mod tests {
         assert_eq!(r.at(0, 0), (0.0 + 1.0 + 10.0 + 11.0) / 4.0);
         assert_eq!(r.at(2, 1), 24.0);
         assert_eq!(factor_for(7696, 1800, 512), 16);
+        assert_eq!(factor_for_area(7696, 1800, 640 * 640), 6);
+        assert_eq!(factor_for_area(100, 100, 640 * 640), 1);
         assert_eq!(robust_sigma([1.0, -1.0, 1.0]), 1.4826);
         // A dead pixel in a flat image disappears.
         let mut flat = GreyF32::from_pixel(6, 6, Luma([100.0]));

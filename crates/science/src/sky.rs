@@ -4,14 +4,16 @@
 //! The paper gives no more than that step; this is how rovernav does it:
 //! 1. Reduce the image to a working size (block means, then a 3x3 median against dead and hot
 //!    pixels: the noise-reduction step).
-//! 2. Texture: the mean absolute difference between each pixel and its 3x3 mean, over a 5x5
+//! 2. Texture: the mean absolute difference between each pixel and its 3x3 median, over a 5x5
 //!    window, relative to the local brightness. Mars' sky is smooth at the pixel scale (its
 //!    brightness changes over tens of degrees), the ground is textured at every scale (grain,
-//!    rocks, shadows), also when it is hazed or brighter than the sky.
+//!    rocks, shadows), also when it is hazed or brighter than the sky. A median keeps straight
+//!    steps, so the seam between two frames of a mosaic (or the skyline itself) is not texture.
 //! 3. Groundness of each pixel: 0 below half the texture threshold, 1 above 1.5 times it. The
 //!    threshold adapts to the image's noise (4 times its 5 % texture quantile) within fixed
-//!    bounds (1 % to 4 % relative texture), so an all-sky image stays sky and an image without
-//!    sky gets no sky.
+//!    bounds (0.6 % to 1.5 % relative texture: skies measure 0.3 to 0.5 % in rendered,
+//!    JPEG-mosaic and 12-bit Navcam images, the least textured real ground about 1 to 2 %), so
+//!    an all-sky image stays sky and an image without sky gets none.
 //! 4. The horizon is one row per column with sky above and ground below: the path that
 //!    minimises the groundness above it plus `ground_weight` times the smoothness below it,
 //!    plus `jump_cost` per row the horizon moves between neighbouring columns (dynamic
@@ -24,13 +26,13 @@
 
 use rovernav_vision::image::{Grey8, GreyF32};
 
-use crate::plane::{Plane, factor_for, quantile};
+use crate::plane::{Plane, factor_for_area, quantile};
 
 /// Parameters of the sky segmentation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkyParams {
-    /// Longer side of the working image (pixels).
-    pub max_side: usize,
+    /// Most pixels of the working image (a wide mosaic keeps its short side's detail).
+    pub max_pixels: usize,
     /// Lower bound of the relative texture threshold.
     pub min_threshold: f32,
     /// Upper bound of the relative texture threshold.
@@ -43,7 +45,13 @@ pub struct SkyParams {
 
 impl Default for SkyParams {
     fn default() -> Self {
-        Self { max_side: 640, min_threshold: 0.01, max_threshold: 0.04, ground_weight: 0.3, jump_cost: 0.4 }
+        Self {
+            max_pixels: 640 * 640,
+            min_threshold: 0.006,
+            max_threshold: 0.015,
+            ground_weight: 0.3,
+            jump_cost: 0.4,
+        }
     }
 }
 
@@ -56,6 +64,8 @@ pub struct SkyMask {
     pub height: u32,
     /// Per column, the first row that is not sky (0: no sky; `height`: all sky).
     pub horizon: Vec<u32>,
+    /// Per column, the first row with data (below a mosaic's black fill; usually 0).
+    pub top: Vec<u32>,
     /// The relative texture threshold used.
     pub threshold: f32,
 }
@@ -63,13 +73,14 @@ pub struct SkyMask {
 impl SkyMask {
     /// Whether pixel (x, y) is sky.
     pub fn is_sky(&self, x: u32, y: u32) -> bool {
-        self.horizon.get(x as usize).is_some_and(|&h| y < h)
+        self.horizon.get(x as usize).is_some_and(|&h| y < h && y >= self.top[x as usize])
     }
 
     /// Fraction of the image that is sky.
     pub fn fraction(&self) -> f64 {
         let n = self.width as f64 * self.height as f64;
-        if n == 0.0 { 0.0 } else { self.horizon.iter().map(|&h| h as f64).sum::<f64>() / n }
+        let rows: f64 = self.horizon.iter().zip(&self.top).map(|(&h, &t)| h.saturating_sub(t) as f64).sum();
+        if n == 0.0 { 0.0 } else { rows / n }
     }
 
     /// The mask as an image: 255 for sky, 0 otherwise.
@@ -82,11 +93,18 @@ impl SkyMask {
 pub fn segment_sky(image: &GreyF32, params: &SkyParams) -> SkyMask {
     let (w, h) = image.dimensions();
     if w == 0 || h == 0 {
-        return SkyMask { width: w, height: h, horizon: vec![0; w as usize], threshold: 0.0 };
+        return SkyMask {
+            width: w,
+            height: h,
+            horizon: vec![0; w as usize],
+            top: vec![0; w as usize],
+            threshold: 0.0,
+        };
     }
-    let f = factor_for(w, h, params.max_side);
-    let p = Plane::prepared(image, f);
-    let (ground, threshold) = groundness(&p, params);
+    let f = factor_for_area(w, h, params.max_pixels);
+    let raw = Plane::reduced(image, f);
+    let p = raw.median3();
+    let (ground, threshold) = groundness(&raw, &p, params);
     let mut rows = horizon_path(&ground, p.width, p.height, params);
     refine_to_edge(&p, &mut rows);
     // Back to full resolution: each working column covers f image columns; linear between
@@ -100,31 +118,47 @@ pub fn segment_sky(image: &GreyF32, params: &SkyParams) -> SkyMask {
             ((r * f as f64).round() as u32).min(h)
         })
         .collect();
-    SkyMask { width: w, height: h, horizon, threshold }
+    // Leading fill of each column: pixels below 20 % of the bright level (a mosaic's black
+    // fill and its grid lines; a sky is never that dark next to its image's bright end).
+    let bright = quantile(image.as_raw().iter().copied(), 0.99).max(1e-6);
+    let top: Vec<u32> = (0..w)
+        .zip(&horizon)
+        .map(|(x, &hz)| (0..hz).find(|&y| image.get_pixel(x, y)[0] > 0.2 * bright).unwrap_or(hz))
+        .collect();
+    SkyMask { width: w, height: h, horizon, top, threshold }
 }
 
-/// Per working pixel, how much it looks like ground (0..1), and the texture threshold.
-fn groundness(p: &Plane, params: &SkyParams) -> (Vec<f32>, f32) {
-    let mean3 = p.box_mean(1);
+/// Per working pixel, how much it looks like ground (0..1, `None` where there is no data: a
+/// mosaic's black fill), and the texture threshold. Means are taken over data pixels only, so
+/// the edge of the fill is not texture.
+fn groundness(raw: &Plane, p: &Plane, params: &SkyParams) -> (Vec<Option<f32>>, f32) {
+    let bright = quantile(p.data.iter().copied(), 0.99).max(1e-6);
+    let floor = 0.01 * bright;
+    // Data pixels whose 3x3 neighbourhood is all data (a working pixel next to the fill
+    // averages fill and image).
+    let (w, h) = (p.width, p.height);
+    let valid: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let all = (y.saturating_sub(1)..(y + 2).min(h))
+                .all(|yy| (x.saturating_sub(1)..(x + 2).min(w)).all(|xx| p.at(xx, yy) > floor));
+            if all { 1.0 } else { 0.0 }
+        })
+        .collect();
     let detail = Plane {
         width: p.width,
         height: p.height,
-        data: p.data.iter().zip(&mean3.data).map(|(a, b)| (a - b).abs()).collect(),
+        data: raw.data.iter().zip(&p.data).map(|(a, b)| (a - b).abs()).collect(),
     };
-    let texture = detail.box_mean(2);
-    let level = p.box_mean(2);
-    let bright = quantile(p.data.iter().copied(), 0.99).max(1e-6);
-    let floor = 0.01 * bright;
+    let texture = detail.masked_mean_with(&valid, 2);
+    let level = p.masked_mean_with(&valid, 2);
     let relative: Vec<f32> = texture.data.iter().zip(&level.data).map(|(t, l)| t / l.max(floor)).collect();
-    let threshold =
-        (4.0 * quantile(relative.iter().copied(), 0.05)).clamp(params.min_threshold, params.max_threshold);
+    let data_texture = relative.iter().zip(&valid).filter(|(_, v)| **v > 0.0).map(|(r, _)| *r);
+    let threshold = (4.0 * quantile(data_texture, 0.05)).clamp(params.min_threshold, params.max_threshold);
     let ground = relative
         .iter()
-        .zip(&level.data)
-        .map(|(&t, &l)| {
-            // No data (a mosaic's black fill): neither sky nor ground.
-            if l < floor { 0.5 } else { ((t / threshold - 0.5) / 1.0).clamp(0.0, 1.0) }
-        })
+        .zip(&valid)
+        .map(|(&t, &v)| (v > 0.0).then(|| (t / threshold - 0.5).clamp(0.0, 1.0)))
         .collect();
     (ground, threshold)
 }
@@ -151,18 +185,20 @@ fn refine_to_edge(p: &Plane, rows: &mut [usize]) {
 }
 
 /// The horizon row of each column (0..=height) by dynamic programming over columns.
-fn horizon_path(ground: &[f32], w: usize, h: usize, params: &SkyParams) -> Vec<usize> {
+fn horizon_path(ground: &[Option<f32>], w: usize, h: usize, params: &SkyParams) -> Vec<usize> {
     let n = h + 1;
     // cost[r]: horizon at row r = groundness of rows < r + weight * smoothness of rows >= r.
+    // A pixel without data costs nothing on either side.
     let column_cost = |x: usize| -> Vec<f32> {
-        let total_smooth: f32 = (0..h).map(|y| 1.0 - ground[y * w + x]).sum();
+        let smooth = |y: usize| ground[y * w + x].map_or(0.0, |g| 1.0 - g);
+        let total_smooth: f32 = (0..h).map(smooth).sum();
         let mut c = Vec::with_capacity(n);
         let (mut above, mut smooth_above) = (0f32, 0f32);
         for r in 0..n {
             c.push(above + params.ground_weight * (total_smooth - smooth_above));
             if r < h {
-                above += ground[r * w + x];
-                smooth_above += 1.0 - ground[r * w + x];
+                above += ground[r * w + x].unwrap_or(0.0);
+                smooth_above += smooth(r);
             }
         }
         c

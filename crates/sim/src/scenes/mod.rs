@@ -128,3 +128,66 @@ pub fn event_extent(contrast: &[f32], width: usize, min: f32) -> (Option<[u32; 4
     let bbox = (n > 0).then(|| [x0 as u32, y0 as u32, (x1 - x0 + 1) as u32, (y1 - y0 + 1) as u32]);
     (bbox, n, peak)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::Label;
+
+    #[test]
+    fn cloud_truth_lies_in_the_sky_and_clear_cases_have_none() {
+        let site = Site::new(3);
+        let clear = clouds::cloud_image(&site, 0, 64, 1);
+        assert_eq!(clear.truth.class, clouds::CloudClass::Clear);
+        assert!(!clear.truth.cloud && clear.truth.peak_contrast == 0.0);
+        // Distinct cases (indices 14..19 of every 20): the cloud pixels are sky pixels.
+        let mut seen = 0;
+        for index in 14..20 {
+            let case = clouds::cloud_image(&site, index, 64, 1);
+            let Some([x, y, w, h]) = case.truth.bbox else { continue };
+            seen += 1;
+            assert!(x + w <= 64 && y + h <= 64);
+            // Clouds are seen against the sky: most of their box is sky to the renderer.
+            let labels = &case.rendered.labels;
+            let sky = (y..y + h).flat_map(|r| (x..x + w).map(move |c| (r * 64 + c) as usize));
+            let (n, in_sky) = sky.fold((0, 0), |(n, s), i| (n + 1, s + (labels[i] == Label::Sky) as usize));
+            assert!(case.truth.peak_contrast >= clouds::VISIBLE_CONTRAST);
+            assert!(2 * in_sky > n, "cloud box {:?}: {in_sky} of {n} pixels are sky", case.truth.bbox);
+        }
+        assert!(seen >= 3, "{seen} distinct clouds visible");
+    }
+
+    #[test]
+    fn dust_devil_truth_follows_the_column_and_empty_sequences_have_none() {
+        let site = Site::new(4);
+        let empty = dust_devils::dust_devil_sequence(&site, 0, 6, 64, 2);
+        assert!(empty.truth.iter().all(|t| !t.present && t.peak_contrast == 0.0));
+        let seq = dust_devils::dust_devil_sequence(&site, 1, 8, 96, 2);
+        let present: Vec<_> = seq.truth.iter().filter(|t| t.present).collect();
+        assert!(!present.is_empty());
+        // The scene is static but for the dust devils: wherever two frames' noise-free
+        // radiances differ by more than twice the visibility contrast, one of their truth boxes
+        // covers the pixel.
+        let n = 96;
+        for k in 0..seq.frames.len() {
+            for j in 0..k {
+                let (a, b) = (&seq.frames[k].radiance, &seq.frames[j].radiance);
+                for i in 0..n * n {
+                    let d = (a[i] - b[i]).abs() / a[i].min(b[i]).max(1e-6);
+                    if d > 2.0 * dust_devils::VISIBLE_CONTRAST {
+                        let (x, y) = ((i % n) as u32, (i / n) as u32);
+                        let inside = [&seq.truth[k], &seq.truth[j]].iter().any(|t| {
+                            t.bbox.is_some_and(|[bx, by, bw, bh]| {
+                                x >= bx && x < bx + bw && y >= by && y < by + bh
+                            })
+                        });
+                        assert!(
+                            inside,
+                            "frames {k}/{j}: pixel ({x}, {y}) changed by {d:.3} outside the truth boxes"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
