@@ -158,7 +158,8 @@ fn components_on_the_bus_reproduce_the_direct_loop_on_a_small_yard() {
     assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
     assert!(out.report.cycles > 10, "a real traverse: {} cycles", out.report.cycles);
     // A finished mission stands every component down.
-    assert_eq!(out.report.components.len(), 9);
+    assert_eq!(out.report.components.len(), 10);
+    assert!(out.report.components.iter().any(|c| c.name == "camera-server"));
     assert!(out.report.components.iter().all(|c| c.state == "Standby"), "{:?}", out.report.components);
     assert_eq!(out.report.tasks.len(), 1);
     assert_eq!(out.report.tasks[0].state, "success");
