@@ -29,6 +29,10 @@ pub struct EvalScienceArgs {
     /// Seed of the set.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Block-compress every rendered image at this JPEG-like quality (1..100); the onboard
+    /// detectors see raw frames, so the default is none.
+    #[arg(long)]
+    pub jpeg_quality: Option<u8>,
     /// Budget of the triage as a fraction of the raw volume.
     #[arg(long, default_value_t = 0.1)]
     pub budget: f64,
@@ -117,6 +121,9 @@ pub fn evaluate(args: &EvalScienceArgs) -> anyhow::Result<ScienceReport> {
     if !(32..=2048).contains(&args.size) {
         anyhow::bail!("--size {}: must be 32 to 2048 pixels", args.size);
     }
+    if args.jpeg_quality.is_some_and(|q| !(1..=100).contains(&q)) {
+        anyhow::bail!("--jpeg-quality: must be 1 to 100");
+    }
     if !(args.budget.is_finite() && args.budget > 0.0 && args.budget <= 1.0) {
         anyhow::bail!("--budget {}: must be a fraction in (0, 1]", args.budget);
     }
@@ -191,7 +198,8 @@ fn score_clouds(args: &EvalScienceArgs, sites: &[Site]) -> anyhow::Result<Vec<Sc
     (0..n)
         .into_par_iter()
         .map(|i| {
-            let case = clouds::cloud_image(&sites[i % sites.len()], i, args.size, args.seed);
+            let case =
+                clouds::cloud_image(&sites[i % sites.len()], i, args.size, args.seed, args.jpeg_quality);
             if let Some(dir) = &args.out {
                 let path = dir
                     .join(format!("cloud_{i:03}_{}.png", if case.truth.cloud { "cloud" } else { "clear" }));
@@ -279,6 +287,7 @@ fn score_dust_devils(args: &EvalScienceArgs, sites: &[Site], n: usize) -> anyhow
                 lengths[s],
                 args.size,
                 args.seed,
+                args.jpeg_quality,
             );
             if let Some(dir) = &args.out {
                 for (k, f) in seq.frames.iter().enumerate() {
@@ -354,6 +363,7 @@ mod tests {
             count: Some(count),
             size,
             seed: 1,
+            jpeg_quality: None,
             budget: 0.1,
             out: None,
             json: false,
@@ -365,7 +375,7 @@ mod tests {
     fn sky_mask_agrees_with_the_renderer_labels() {
         let site = Site::new(5);
         for index in [0, 1, 2, 3, 20, 21] {
-            let case = clouds::cloud_image(&site, index, 128, 3);
+            let case = clouds::cloud_image(&site, index, 128, 3, None);
             let mask = segment_sky(&grey(&case.rendered.image), &SkyParams::default());
             let agree = (0..128 * 128)
                 .filter(|&i| {

@@ -110,8 +110,12 @@ pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> Cl
     let mut mask = vec![0f32; pw * ph];
     for x in 0..pw {
         let cols = (x * f) as u32..(((x + 1) * f) as u32).min(w);
-        let top = cols.map(|c| sky.horizon[c as usize]).min().unwrap_or(0) as usize / f;
-        for y in 0..top.saturating_sub(margin).min(ph) {
+        let cols: Vec<usize> = cols.map(|c| c as usize).collect();
+        let bottom = cols.iter().map(|&c| sky.horizon[c]).min().unwrap_or(0) as usize / f;
+        // Below a mosaic's fill, one working row more (its block mixes fill and sky).
+        let first = cols.iter().map(|&c| sky.top[c]).max().unwrap_or(0) as usize;
+        let first = if first > 0 { first.div_ceil(f) + 1 } else { 0 };
+        for y in first..bottom.saturating_sub(margin).min(ph) {
             mask[y * pw + x] = 1.0;
         }
     }

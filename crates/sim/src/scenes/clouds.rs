@@ -66,9 +66,10 @@ pub struct CloudImage {
     pub truth: CloudTruth,
 }
 
-/// Renders cloud case `index` of the set of `seed` at `size` pixels square (deterministic).
-/// Classes cycle so that 45 % are clear, 25 % faint and 30 % distinct.
-pub fn cloud_image(site: &Site, index: usize, size: usize, seed: u64) -> CloudImage {
+/// Renders cloud case `index` of the set of `seed` at `size` pixels square (deterministic),
+/// raw or block-compressed at `quality`. Classes cycle so that 45 % are clear, 25 % faint and
+/// 30 % distinct.
+pub fn cloud_image(site: &Site, index: usize, size: usize, seed: u64, quality: Option<u8>) -> CloudImage {
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9).wrapping_add(index as u64));
     let class = match index % 20 {
         0..=8 => CloudClass::Clear,
@@ -100,7 +101,7 @@ pub fn cloud_image(site: &Site, index: usize, size: usize, seed: u64) -> CloudIm
             add_cloud(&mut scene.volumes, &mut rng, &camera, class, scene.time);
         }
     }
-    let rendered = render(&scene, &camera, "navcam_left", &science_settings(), seed ^ index as u64);
+    let rendered = render(&scene, &camera, "navcam_left", &science_settings(quality), seed ^ index as u64);
     let contrast = volume_contrast(&scene, &camera, &rendered.radiance, &rendered.range);
     let (bbox, pixels, peak) = event_extent(&contrast, size, VISIBLE_CONTRAST);
     let sky = rendered.labels.iter().filter(|l| **l == crate::render::Label::Sky).count();

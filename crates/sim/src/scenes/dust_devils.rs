@@ -50,14 +50,15 @@ pub struct DustDevilSequence {
     pub interval_s: f64,
 }
 
-/// Renders sequence `index` of the set of `seed` at `size` pixels square, `frames` long
-/// (deterministic).
+/// Renders sequence `index` of the set of `seed` at `size` pixels square, `frames` long, raw or
+/// block-compressed at `quality` (deterministic).
 pub fn dust_devil_sequence(
     site: &Site,
     index: usize,
     frames: usize,
     size: usize,
     seed: u64,
+    quality: Option<u8>,
 ) -> DustDevilSequence {
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD1B5_4A32).wrapping_add(index as u64));
     let with_devils = !index.is_multiple_of(3);
@@ -85,8 +86,13 @@ pub fn dust_devil_sequence(
         let mut scene = Scene::new(&site.terrain, &site.field, &sun, atmosphere);
         scene.time = start + k as f64 * interval_s;
         scene.volumes = devils.iter().filter(|d| (d.1..=d.2).contains(&k)).map(|d| d.0).collect();
-        let rendered =
-            render(&scene, &camera, "navcam_left", &science_settings(), seed ^ (index * 64 + k) as u64);
+        let rendered = render(
+            &scene,
+            &camera,
+            "navcam_left",
+            &science_settings(quality),
+            seed ^ (index * 64 + k) as u64,
+        );
         let contrast = volume_contrast(&scene, &camera, &rendered.radiance, &rendered.range);
         let (bbox, pixels, peak) = event_extent(&contrast, size, VISIBLE_CONTRAST);
         let present = pixels >= MIN_DEVIL_PIXELS;

@@ -62,13 +62,20 @@ impl Site {
 }
 
 /// The noisier detector of the science sets: MER Navcam images downlinked after 12-to-8-bit
-/// companding and compression carry more noise than the raw 12-bit default; 15 e-/DN and 2 DN
-/// read noise give about 0.6 % at mid-scale.
-pub fn science_settings() -> RenderSettings {
+/// companding and lossy compression carry more noise than the raw 12-bit default; 15 e-/DN and
+/// 2 DN read noise give about 0.6 % at mid-scale, and `jpeg_quality` adds block compression
+/// (the flight images were ICER-compressed; the renderer's DCT quantiser stands in for it).
+pub fn science_settings(jpeg_quality: Option<u8>) -> RenderSettings {
     RenderSettings {
         supersample: 1,
         shadows: true,
-        sensor: Sensor { gain_e_per_dn: 15.0, read_noise_dn: 2.0, dead_pixels: 4, ..Sensor::default() },
+        sensor: Sensor {
+            gain_e_per_dn: 15.0,
+            read_noise_dn: 2.0,
+            dead_pixels: 4,
+            jpeg_quality,
+            ..Sensor::default()
+        },
     }
 }
 
@@ -137,13 +144,13 @@ mod tests {
     #[test]
     fn cloud_truth_lies_in_the_sky_and_clear_cases_have_none() {
         let site = Site::new(3);
-        let clear = clouds::cloud_image(&site, 0, 64, 1);
+        let clear = clouds::cloud_image(&site, 0, 64, 1, None);
         assert_eq!(clear.truth.class, clouds::CloudClass::Clear);
         assert!(!clear.truth.cloud && clear.truth.peak_contrast == 0.0);
         // Distinct cases (indices 14..19 of every 20): the cloud pixels are sky pixels.
         let mut seen = 0;
         for index in 14..20 {
-            let case = clouds::cloud_image(&site, index, 64, 1);
+            let case = clouds::cloud_image(&site, index, 64, 1, None);
             let Some([x, y, w, h]) = case.truth.bbox else { continue };
             seen += 1;
             assert!(x + w <= 64 && y + h <= 64);
@@ -160,9 +167,9 @@ mod tests {
     #[test]
     fn dust_devil_truth_follows_the_column_and_empty_sequences_have_none() {
         let site = Site::new(4);
-        let empty = dust_devils::dust_devil_sequence(&site, 0, 6, 64, 2);
+        let empty = dust_devils::dust_devil_sequence(&site, 0, 6, 64, 2, None);
         assert!(empty.truth.iter().all(|t| !t.present && t.peak_contrast == 0.0));
-        let seq = dust_devils::dust_devil_sequence(&site, 1, 8, 96, 2);
+        let seq = dust_devils::dust_devil_sequence(&site, 1, 8, 96, 2, None);
         let present: Vec<_> = seq.truth.iter().filter(|t| t.present).collect();
         assert!(!present.is_empty());
         // The scene is static but for the dust devils: wherever two frames' noise-free
