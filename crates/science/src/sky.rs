@@ -20,6 +20,8 @@
 //!    programming over columns, an L1 min-convolution per column: O(width x height)). The
 //!    horizon may lie at row 0 (no sky in that column) or at the bottom (all sky), and may
 //!    slant (a tilted rover) or step (a rock on the skyline).
+//! 5. Each column's horizon moves to the strongest brightness step within 4 rows (the texture
+//!    window blurs the skyline by that much), then a 5-column running median removes spikes.
 //!
 //! Departure: one sky run per column (sky above ground), so sky seen through a gap below an
 //! overhang counts as ground; Navcam views have none.
@@ -107,6 +109,7 @@ pub fn segment_sky(image: &GreyF32, params: &SkyParams) -> SkyMask {
     let (ground, threshold) = groundness(&raw, &p, params);
     let mut rows = horizon_path(&ground, p.width, p.height, params);
     refine_to_edge(&p, &mut rows);
+    median_across_columns(&mut rows, 2);
     // Back to full resolution: each working column covers f image columns; linear between
     // column centres, so a slanted horizon stays a line.
     let horizon = (0..w as usize)
@@ -181,6 +184,17 @@ fn refine_to_edge(p: &Plane, rows: &mut [usize]) {
         if let Some(best) = (lo..=hi).max_by(|&a, &b| step(x, a).total_cmp(&step(x, b))) {
             *r = best;
         }
+    }
+}
+
+/// A running median of radius `r` along the columns: removes one- and two-column spikes left
+/// by the per-column refinement, keeps steps wider than that (a rock on the skyline).
+fn median_across_columns(rows: &mut [usize], r: usize) {
+    let src = rows.to_vec();
+    for (x, out) in rows.iter_mut().enumerate() {
+        let mut w: Vec<usize> = src[x.saturating_sub(r)..(x + r + 1).min(src.len())].to_vec();
+        let mid = w.len() / 2;
+        *out = *w.select_nth_unstable(mid).1;
     }
 }
 
