@@ -43,9 +43,13 @@ pub fn data_dir() -> std::path::PathBuf {
 pub fn data_file_or_skip(relative: &str) -> Option<std::path::PathBuf> {
     let p = data_dir().join(relative);
     if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipping: data file {} not found (set ROVERNAV_DATA)", p.display());
-        None
+        return Some(p);
     }
+    assert!(
+        std::env::var("ROVERNAV_REQUIRE_DATA").as_deref() != Ok("1"),
+        "data file {} missing and ROVERNAV_REQUIRE_DATA=1",
+        p.display()
+    );
+    eprintln!("skipping: data file {} not found (set ROVERNAV_DATA)", p.display());
+    None
 }

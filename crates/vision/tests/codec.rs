@@ -8,20 +8,7 @@ use rovernav_vision::image::{Grey8, Grey16, Rgb8};
 
 const NAVCAM: &str = "gale/navcam/NLA_399621413EDR_F0030308NCAM00405M1.IMG";
 
-/// The data file, or `None` (skip) unless ROVERNAV_REQUIRE_DATA=1, which makes absence fail.
-fn data_file(relative: &str) -> Option<PathBuf> {
-    let path = rovernav_core::data_dir().join(relative);
-    if path.is_file() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var("ROVERNAV_REQUIRE_DATA").as_deref() != Ok("1"),
-        "data file {} missing and ROVERNAV_REQUIRE_DATA=1",
-        path.display()
-    );
-    eprintln!("skipping: data file {} not found (set ROVERNAV_DATA)", path.display());
-    None
-}
+use rovernav_core::data_file_or_skip as data_file;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("rovernav-vision-codec-{}-{name}", std::process::id()));

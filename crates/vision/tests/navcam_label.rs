@@ -2,28 +2,13 @@
 //! instrument (a 45 deg field of view over 1024 pixels) and against the label's own derived
 //! pointing and field of view, which JPL's ground software computed independently.
 
-use std::path::PathBuf;
-
 use nalgebra::{Point2, Vector3};
 use rovernav_terrain::io::Pds3Label;
 use rovernav_vision::camera::{AnyCamera, Cahvor, CameraModel, read};
 
 const NAVCAM: &str = "gale/navcam/NLA_399621413EDR_F0030308NCAM00405M1.IMG";
 
-/// The data file, or `None` (skip) unless ROVERNAV_REQUIRE_DATA=1, which makes absence fail.
-fn data_file(relative: &str) -> Option<PathBuf> {
-    let path = rovernav_core::data_dir().join(relative);
-    if path.is_file() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var("ROVERNAV_REQUIRE_DATA").as_deref() != Ok("1"),
-        "data file {} missing and ROVERNAV_REQUIRE_DATA=1",
-        path.display()
-    );
-    eprintln!("skipping: data file {} not found (set ROVERNAV_DATA)", path.display());
-    None
-}
+use rovernav_core::data_file_or_skip as data_file;
 
 fn navcam() -> Option<(Pds3Label, Cahvor)> {
     let label = Pds3Label::open(data_file(NAVCAM)?).expect("label parses");

@@ -3,8 +3,6 @@
 //! with added noise, using the tracker's own magnification and roll compensation; and the NCC
 //! score map against imageproc's template matching as an independent implementation.
 
-use std::path::PathBuf;
-
 use image::Luma;
 use imageproc::template_matching::{MatchTemplateMethod, match_template};
 use nalgebra::Point2;
@@ -16,20 +14,7 @@ use rovernav_vision::tracking::{
 
 const NAVCAM: &str = "gale/navcam/NLA_399621413EDR_F0030308NCAM00405M1.IMG";
 
-/// The data file, or `None` (skip) unless ROVERNAV_REQUIRE_DATA=1, which makes absence fail.
-fn data_file(relative: &str) -> Option<PathBuf> {
-    let path = rovernav_core::data_dir().join(relative);
-    if path.is_file() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var("ROVERNAV_REQUIRE_DATA").as_deref() != Ok("1"),
-        "data file {} missing and ROVERNAV_REQUIRE_DATA=1",
-        path.display()
-    );
-    eprintln!("skipping: data file {} not found (set ROVERNAV_DATA)", path.display());
-    None
-}
+use rovernav_core::data_file_or_skip as data_file;
 
 fn navcam() -> Option<GreyF32> {
     Some(codec::read_image(data_file(NAVCAM)?).unwrap().to_grey_f32())
