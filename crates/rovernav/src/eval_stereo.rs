@@ -22,7 +22,8 @@ use rovernav_executive::{Mission, build_world};
 use rovernav_sim::render::{Label, pose_isometry};
 use rovernav_sim::sensors::RangeGeometry;
 use rovernav_sim::stereo_range::{self, StereoImaging};
-use rovernav_sim::{HeightField, SensorModel, Simulator};
+use rovernav_sim::vehicle::settled_pose;
+use rovernav_sim::{HeightField, SensorModel};
 use rovernav_vision::camera::Movable;
 use rovernav_vision::{Cahv, CameraModel};
 use serde::Serialize;
@@ -135,8 +136,7 @@ fn seed_errors(seed: u64, imaging: &StereoImaging) -> anyhow::Result<(usize, Vec
     mission.seed = seed;
     let world = build_world(&mission, "built-in default mission")?;
     let model = SensorModel::default();
-    let sim = Simulator::new(world.terrain.clone(), world.rover.clone(), model.clone(), world.start, seed);
-    let truth = sim.truth();
+    let truth = settled_pose(&world.terrain.dem, &world.rover, world.start);
     let field = HeightField::new(&world.terrain.dem);
     let mut geometries: Vec<RangeGeometry> = (0..8)
         .map(|k| RangeGeometry::mast(&world.rover, &model, f64::from(k) * std::f64::consts::FRAC_PI_4))

@@ -5,7 +5,6 @@
 use anyhow::Context;
 use rovernav_core::Pose3;
 use rovernav_executive::{Mission, build_world};
-use rovernav_sim::Simulator;
 use rovernav_sim::render::{Atmosphere, CAMERA_NAMES, RenderSettings, Rig, Scene, Sun, render};
 use std::path::{Path, PathBuf};
 
@@ -90,14 +89,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--camera: unknown camera `{}` (known: {})", args.camera, CAMERA_NAMES.join(", "));
     };
     let world = build_world(&mission, &origin)?;
-    let sim = Simulator::new(
-        world.terrain.clone(),
-        world.rover.clone(),
-        world.sensor_model.clone(),
-        world.start,
-        mission.seed,
-    );
-    let truth = sim.truth();
+    let truth = rovernav_sim::vehicle::settled_pose(&world.terrain.dem, &world.rover, world.start);
     let site =
         Pose3 { x: world.start.x, y: world.start.y, z: truth.z, yaw: world.start.yaw, ..Default::default() };
     let field = rovernav_sim::HeightField::new(&world.terrain.dem);

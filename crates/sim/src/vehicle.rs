@@ -198,6 +198,14 @@ impl std::fmt::Display for Hazard {
     }
 }
 
+/// The true pose of a rover placed at `start`: settled on the terrain (the rule of
+/// `Simulator::new`), or the bare start pose where it cannot settle (off the DEM).
+pub fn settled_pose(dem: &Dem, rover: &RoverConfig, start: Pose2) -> Pose3 {
+    let start = Pose2::new(start.x, start.y, rovernav_core::wrap_angle(start.yaw));
+    settle(dem, &VehicleGeometry::new(rover), start)
+        .map_or(Pose3 { x: start.x, y: start.y, yaw: start.yaw, ..Default::default() }, |c| c.pose)
+}
+
 /// Settles the rover on the terrain at a planar pose; `None` when a wheel or belly point is
 /// outside the DEM or over nodata.
 pub fn settle(dem: &Dem, geom: &VehicleGeometry, pose: Pose2) -> Option<Contact> {

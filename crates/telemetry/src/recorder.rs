@@ -6,9 +6,8 @@ use crate::messages::{
 };
 use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
 use rovernav_bus::Record;
-use rovernav_core::{Point2, Pose2, Pose3, PoseEstimate, SensorFrame, wrap_angle};
+use rovernav_core::{Point2, Pose3, PoseEstimate, SensorFrame};
 use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
-use rovernav_sim::VehicleGeometry;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -203,10 +202,7 @@ impl<W: Write + Seek + Send + 'static> Drop for TelemetryRecorder<W> {
 /// The true pose the simulator starts from: the rover settled on the terrain at the start
 /// (the same rule as `Simulator::new`), or the bare start pose off the terrain.
 fn initial_truth(world: &World) -> Pose3 {
-    let geometry = VehicleGeometry::new(&world.rover);
-    let start = Pose2::new(world.start.x, world.start.y, wrap_angle(world.start.yaw));
-    rovernav_sim::vehicle::settle(&world.terrain.dem, &geometry, start)
-        .map_or(Pose3 { x: start.x, y: start.y, yaw: start.yaw, ..Default::default() }, |c| c.pose)
+    rovernav_sim::vehicle::settled_pose(&world.terrain.dem, &world.rover, world.start)
 }
 
 impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {

@@ -141,13 +141,7 @@ pub fn compress(image: &mut [u16], width: usize, quality: u8) {
     let q = quality.clamp(1, 100) as f64;
     let scale = if q < 50.0 { 50.0 / q } else { 2.0 - q / 50.0 };
     let table: Vec<f64> = LUMA_TABLE.iter().map(|t| ((t * scale).round().max(1.0)) * 16.0).collect();
-    let basis: Vec<f64> = (0..64)
-        .map(|i| {
-            let (u, x) = (i / 8, i % 8);
-            let c = if u == 0 { (0.125f64).sqrt() } else { 0.5 };
-            c * (((2 * x + 1) as f64 * u as f64 * std::f64::consts::PI) / 16.0).cos()
-        })
-        .collect();
+    let basis = dct_basis();
     let height = image.len() / width;
     let blocks_x = width.div_ceil(8);
     let blocks: Vec<(usize, usize)> =
@@ -199,6 +193,17 @@ fn transform(block: &[f64; 64], basis: &[f64], inverse: bool) -> [f64; 64] {
     out
 }
 
+/// The orthonormal 8-point DCT-II basis, row u (frequency) by column x (sample).
+fn dct_basis() -> Vec<f64> {
+    (0..64)
+        .map(|i| {
+            let (u, x) = (i / 8, i % 8);
+            let c = if u == 0 { (0.125f64).sqrt() } else { 0.5 };
+            c * (((2 * x + 1) as f64 * u as f64 * std::f64::consts::PI) / 16.0).cos()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -224,13 +229,7 @@ mod tests {
 
     #[test]
     fn forward_then_inverse_dct_is_identity() {
-        let basis: Vec<f64> = (0..64)
-            .map(|i| {
-                let (u, x) = (i / 8, i % 8);
-                let c = if u == 0 { (0.125f64).sqrt() } else { 0.5 };
-                c * (((2 * x + 1) as f64 * u as f64 * std::f64::consts::PI) / 16.0).cos()
-            })
-            .collect();
+        let basis = dct_basis();
         let mut block = [0.0; 64];
         for (i, b) in block.iter_mut().enumerate() {
             *b = ((i * 37) % 101) as f64 - 50.0;
