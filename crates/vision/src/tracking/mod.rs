@@ -149,18 +149,6 @@ pub struct TrackParams {
     pub jump_gate: f64,
     /// Search window sizing.
     pub window: WindowParams,
-    /// Where the template comes from at each step.
-    pub template_source: TemplateSource,
-}
-
-/// Where each step's template is cut from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TemplateSource {
-    /// The last tracked image (follows appearance changes; subpixel errors add up step by step).
-    LastImage,
-    /// The designation image, warped for the whole change of range and roll since (no drift;
-    /// suffers when the viewpoint changes the target's look).
-    Designation,
 }
 
 impl Default for TrackParams {
@@ -173,7 +161,6 @@ impl Default for TrackParams {
             exclusion_px: 4.0,
             jump_gate: 3.0,
             window: WindowParams::default(),
-            template_source: TemplateSource::LastImage,
         }
     }
 }
@@ -331,19 +318,17 @@ impl Tracker {
     }
 
     /// Takes a successful match: the target's pixel, its new range and position (from point
-    /// stereo), and the camera roll of `image`; with [`TemplateSource::LastImage`] the next
-    /// template is cut from `image`.
+    /// stereo), and the camera roll of `image`; the next template is cut from `image` (it
+    /// follows the target's changing look; subpixel errors add up step by step).
     pub fn accept(&mut self, image: &GreyF32, target: Target, roll_rad: f64) -> Result<(), TrackError> {
         if !(target.range_m.is_finite() && target.range_m > 0.0) {
             return Err(TrackError::Parameter(format!("range {} m must be positive", target.range_m)));
         }
-        if self.params.template_source == TemplateSource::LastImage {
-            let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
-            self.reference = reference;
-            self.reference_pixel = pixel;
-            self.reference_range_m = target.range_m;
-            self.reference_roll_rad = roll_rad;
-        }
+        let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
+        self.reference = reference;
+        self.reference_pixel = pixel;
+        self.reference_range_m = target.range_m;
+        self.reference_roll_rad = roll_rad;
         self.target = target;
         Ok(())
     }
