@@ -1,0 +1,233 @@
+//! The mission file: terrain, rover, sensors, start, goal, navigator, limits and seed (TOML).
+//!
+//! Unknown fields are rejected so that a misspelt key is an error naming the key and its line,
+//! not a silently ignored setting.
+
+mod faults;
+mod route;
+mod sensors;
+mod tasks;
+mod terrain;
+
+pub use faults::{FaultKindName, FaultSpec, SensorName, Side};
+pub use route::{GoalSpec, PoseSpec};
+pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
+pub use tasks::{TaskKindName, TaskSpecToml};
+pub use terrain::TerrainSpec;
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The built-in default mission (`missions/default.toml`).
+pub const DEFAULT_MISSION_TOML: &str = include_str!("../../../../missions/default.toml");
+
+/// A complete mission description.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Mission {
+    /// Human-readable name.
+    #[serde(default = "default_name")]
+    pub name: String,
+    /// Seed for terrain generation and every sensor's noise.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Registry name of the navigator.
+    #[serde(default = "default_navigator")]
+    pub navigator: String,
+    /// Parameters of the navigator (`[navigator_params]`, names and units as `rovernav
+    /// navigators` lists them); unset ones keep the navigator's defaults.
+    #[serde(default)]
+    pub navigator_params: rovernav_navigation::NavigatorParams,
+    /// Registry name of the localiser.
+    #[serde(default = "default_localizer")]
+    pub localizer: String,
+    /// Mission time budget (s); exceeding it ends the run with `timeout`.
+    #[serde(default = "default_time_limit")]
+    pub time_limit_s: f64,
+    /// Upper bound on navigator cycles; exceeding it ends the run with `timeout`.
+    #[serde(default = "default_max_cycles")]
+    pub max_cycles: u64,
+    /// The world.
+    pub terrain: TerrainSpec,
+    /// Optional rover overrides.
+    #[serde(default)]
+    pub rover: RoverSpec,
+    /// Optional sensor overrides.
+    #[serde(default)]
+    pub sensors: SensorSpec,
+    /// Start pose.
+    pub start: PoseSpec,
+    /// Goal.
+    pub goal: GoalSpec,
+    /// Tasks after reaching the goal (`[[tasks]]`), in order; the plan always first drives to
+    /// each waypoint and then the goal.
+    #[serde(default)]
+    pub tasks: Vec<TaskSpecToml>,
+    /// Faults the simulator injects (`[[faults]]`), for fault-protection tests and drills.
+    #[serde(default)]
+    pub faults: Vec<FaultSpec>,
+    /// Folder the mission file was read from (relative DEM paths resolve against it first).
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
+}
+
+fn default_name() -> String {
+    "mission".into()
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_navigator() -> String {
+    "astar-grid".into()
+}
+fn default_localizer() -> String {
+    "dead-reckoning".into()
+}
+fn default_time_limit() -> f64 {
+    3600.0
+}
+fn default_max_cycles() -> u64 {
+    5000
+}
+
+/// A mission that could not be read or does not make sense.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or schema error (the message carries line and field).
+    #[error("{path}: {message}")]
+    Parse {
+        /// File.
+        path: String,
+        /// What toml said, flattened to one line.
+        message: String,
+    },
+    /// A field has an invalid value.
+    #[error("{path}: field `{field}`: {message}")]
+    Invalid {
+        /// File.
+        path: String,
+        /// Dotted field name.
+        field: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// An invalid-field error with the line of the field's key in `text` when one line holds it.
+fn with_line(error: MissionError, text: &str) -> MissionError {
+    let MissionError::Invalid { path, field, message } = error else { return error };
+    let key = field.rsplit('.').next().unwrap_or(&field).split('[').next().unwrap_or_default();
+    let lines: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            l.trim_start().strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map(|(i, _)| i + 1)
+        .collect();
+    let message = match lines.as_slice() {
+        [line] if !key.is_empty() => format!("line {line}: {message}"),
+        _ => message,
+    };
+    MissionError::Invalid { path, field, message }
+}
+
+impl Mission {
+    /// Parses mission text; `origin` names the source in error messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, MissionError> {
+        let mission: Mission = toml::from_str(text).map_err(|e| {
+            let mut message = String::new();
+            if let Some(span) = e.span() {
+                let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+                message.push_str(&format!("line {line}: "));
+            }
+            message.push_str(&e.message().replace('\n', " "));
+            MissionError::Parse { path: origin.into(), message }
+        })?;
+        mission.validate(origin).map_err(|e| with_line(e, text))?;
+        Ok(mission)
+    }
+
+    /// Reads and validates a mission file.
+    pub fn from_file(path: &Path) -> Result<Self, MissionError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| MissionError::Io { path: shown.clone(), source })?;
+        let mut m = Self::from_toml(&text, &shown)?;
+        m.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(m)
+    }
+
+    /// The built-in default mission.
+    pub fn default_mission() -> Self {
+        Self::from_toml(DEFAULT_MISSION_TOML, "built-in default mission")
+            .expect("the built-in mission is valid")
+    }
+
+    fn validate(&self, origin: &str) -> Result<(), MissionError> {
+        let bad = |field: &str, message: &str| {
+            Err(MissionError::Invalid { path: origin.into(), field: field.into(), message: message.into() })
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.time_limit_s) {
+            return bad("time_limit_s", "must be a positive number of seconds");
+        }
+        if let Err((field, why)) = self.terrain.check() {
+            return bad(field, why);
+        }
+        for (name, spec) in [
+            ("start", (&self.start.x, &self.start.y, &self.start.easting, &self.start.northing)),
+            ("goal", (&self.goal.x, &self.goal.y, &self.goal.easting, &self.goal.northing)),
+        ] {
+            let (x, y, e, n) = spec;
+            let local = x.is_some() && y.is_some();
+            let projected = e.is_some() && n.is_some();
+            if local == projected {
+                return bad(
+                    name,
+                    "give either x and y (local metres) or easting and northing (projected metres)",
+                );
+            }
+            if [x, y, e, n].iter().any(|v| v.is_some_and(|v| !v.is_finite())) {
+                return bad(name, "coordinates must be finite numbers");
+            }
+        }
+        if !self.start.yaw_deg.is_finite() {
+            return bad("start.yaw_deg", "must be a finite number");
+        }
+        if let Err((field, why)) = self.sensors.check() {
+            return bad(&format!("sensors.{field}"), why);
+        }
+        if !positive(self.goal.tolerance_m) {
+            return bad("goal.tolerance_m", "must be positive");
+        }
+        // An unknown navigator name is the run's error (it lists the registered ones).
+        if let Err(e) = rovernav_navigation::check_params(&self.navigator, &self.navigator_params) {
+            let field = e.param().map_or("navigator_params".into(), |p| format!("navigator_params.{p}"));
+            return bad(&field, &e.to_string());
+        }
+        for (i, zone) in self.goal.keep_out.iter().enumerate() {
+            if zone.len() < 3 {
+                return bad(&format!("goal.keep_out[{i}]"), "a polygon needs at least 3 vertices");
+            }
+        }
+        if let Err((field, why)) = tasks::check(self) {
+            return bad(&field, &why);
+        }
+        if let Err((field, why)) = faults::check(&self.faults) {
+            return bad(&field, why);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;
