@@ -1,0 +1,154 @@
+//! The plan's tasks: what each does, the resources it occupies, and its execution state.
+
+use crate::messages::TaskState;
+use rovernav_core::Point2;
+
+/// What a task does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TaskKind {
+    /// Drive to a point (a waypoint or the goal).
+    DriveTo {
+        /// Where (world frame, m).
+        target: Point2,
+        /// Arrival tolerance (m).
+        tolerance: f64,
+    },
+    /// Image all around with the mast.
+    Panorama,
+    /// Image a target with the mast.
+    ScienceImage {
+        /// Target (world frame, m).
+        target: Point2,
+    },
+    /// Place an instrument on a target in front of the rover.
+    PlaceInstrument {
+        /// Target (world frame, m).
+        target: Point2,
+    },
+    /// Scoop a soil sample at a target in front of the rover.
+    Scoop {
+        /// Target (world frame, m).
+        target: Point2,
+    },
+}
+
+/// Something a task occupies while it runs; parallel tasks must not share one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resource {
+    /// The wheels (driving moves them, arm work needs them still).
+    Wheels,
+    /// The mast cameras (navigators sense with them too).
+    Mast,
+    /// The tooling arm.
+    Arm,
+}
+
+impl TaskKind {
+    /// A stable lower-case name (the mission file's `kind`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            TaskKind::DriveTo { .. } => "drive_to",
+            TaskKind::Panorama => "panorama",
+            TaskKind::ScienceImage { .. } => "science_image",
+            TaskKind::PlaceInstrument { .. } => "place_instrument",
+            TaskKind::Scoop { .. } => "scoop",
+        }
+    }
+
+    /// The task's target, if it has one.
+    pub fn target(&self) -> Option<Point2> {
+        match *self {
+            TaskKind::DriveTo { target, .. }
+            | TaskKind::ScienceImage { target }
+            | TaskKind::PlaceInstrument { target }
+            | TaskKind::Scoop { target } => Some(target),
+            TaskKind::Panorama => None,
+        }
+    }
+
+    /// What the task occupies.
+    pub fn resources(&self) -> &'static [Resource] {
+        match self {
+            TaskKind::DriveTo { .. } => &[Resource::Wheels, Resource::Mast],
+            TaskKind::Panorama | TaskKind::ScienceImage { .. } => &[Resource::Mast],
+            TaskKind::PlaceInstrument { .. } | TaskKind::Scoop { .. } => &[Resource::Arm, Resource::Wheels],
+        }
+    }
+
+    pub(super) fn describe(&self) -> String {
+        match self.target() {
+            Some(t) => format!("{} ({:.2}, {:.2})", self.name(), t.x, t.y),
+            None => self.name().to_string(),
+        }
+    }
+}
+
+/// One entry of a mission plan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaskSpec {
+    /// What to do.
+    pub kind: TaskKind,
+    /// Start together with the previous task.
+    pub parallel: bool,
+}
+
+/// Checks that parallel tasks do not share a resource; the error gives the offending task's
+/// index and why.
+pub fn validate_plan(tasks: &[TaskSpec]) -> Result<(), (usize, String)> {
+    let mut group_start = 0;
+    for (i, t) in tasks.iter().enumerate() {
+        if !t.parallel {
+            group_start = i;
+            continue;
+        }
+        if i == 0 {
+            return Err((0, "the first task has no task before it to run in parallel with".into()));
+        }
+        for other in &tasks[group_start..i] {
+            if let Some(r) = t.kind.resources().iter().find(|r| other.kind.resources().contains(r)) {
+                return Err((
+                    i,
+                    format!(
+                        "cannot run in parallel with the {} before it: both need the {r:?}",
+                        other.kind.name()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where a task came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// A waypoint before the goal.
+    Waypoint,
+    /// The goal.
+    Goal,
+    /// An extra task of the mission file.
+    Extra,
+}
+
+/// A task of the plan with its execution state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Task {
+    /// Plan id (stable).
+    pub id: u64,
+    /// What it does.
+    pub kind: TaskKind,
+    /// Starts together with the previous task.
+    pub parallel: bool,
+    /// Where it came from.
+    pub role: Role,
+    /// Execution state.
+    pub state: TaskState,
+    /// The last word on it.
+    pub message: String,
+    /// For a finished drive: the navigator's outcome name.
+    pub outcome: Option<String>,
+    /// Id of the command currently standing for this task in the reflexive layer.
+    pub(super) command: Option<u64>,
+    /// An arm task is turning the rover to face its target before deploying the arm.
+    pub(super) aiming: bool,
+}
