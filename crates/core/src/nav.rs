@@ -86,6 +86,14 @@ pub enum SenseRequest {
         /// Pan angle (rad).
         pan: f64,
     },
+    /// Both Navcam images (left and right, a rectified pair) with the mast head at a body-frame
+    /// pan and tilt: pictures for target tracking, science and the operator, no range.
+    Navcam {
+        /// Pan angle, counter-clockwise from forward (rad).
+        pan: f64,
+        /// Tilt angle, positive up (rad).
+        tilt: f64,
+    },
 }
 
 /// Conditions that stop a motion early, as a real rover's guarded moves do.

@@ -134,6 +134,10 @@ pub struct CameraImage {
     pub bits: u8,
     /// Pixel values, row-major, `width * height` of them.
     pub pixels: Vec<u16>,
+    /// Mast pan when taken, counter-clockwise from forward (rad; 0 for body-fixed cameras).
+    pub pan: f64,
+    /// Mast tilt when taken, positive up (rad; 0 for body-fixed cameras).
+    pub tilt: f64,
 }
 
 /// Everything the platform reports after executing one command.

@@ -319,6 +319,13 @@ pub enum SenseMsg {
         /// Pan (rad).
         pan: f64,
     },
+    /// Both Navcam images at a pan and tilt (rad).
+    Navcam {
+        /// Pan (rad).
+        pan: f64,
+        /// Tilt (rad, positive up).
+        tilt: f64,
+    },
 }
 
 /// A command for the platform, the wire form of [`NavCommand`].
@@ -367,6 +374,7 @@ impl From<&NavCommand> for CommandMsg {
                         SenseRequest::BodyFront => SenseMsg::BodyFront,
                         SenseRequest::BodyRear => SenseMsg::BodyRear,
                         SenseRequest::Lidar { pan } => SenseMsg::Lidar { pan },
+                        SenseRequest::Navcam { pan, tilt } => SenseMsg::Navcam { pan, tilt },
                     })
                     .collect(),
             },
@@ -397,6 +405,7 @@ impl CommandMsg {
                         SenseMsg::BodyFront => SenseRequest::BodyFront,
                         SenseMsg::BodyRear => SenseRequest::BodyRear,
                         SenseMsg::Lidar { pan } => SenseRequest::Lidar { pan },
+                        SenseMsg::Navcam { pan, tilt } => SenseRequest::Navcam { pan, tilt },
                     })
                     .collect(),
             ),
@@ -495,6 +504,12 @@ pub struct ImageMsg {
     /// Pixel values, row-major (base64 of little-endian u16 on the wire).
     #[serde(with = "pixels_base64")]
     pub pixels: Vec<u16>,
+    /// Mast pan when taken (rad).
+    #[serde(default)]
+    pub pan: f64,
+    /// Mast tilt when taken (rad).
+    #[serde(default)]
+    pub tilt: f64,
 }
 
 /// Pixels as base64 of their little-endian bytes: a third larger than the bytes, where a JSON
@@ -528,6 +543,8 @@ impl From<&CameraImage> for ImageMsg {
             height: i.height,
             bits: i.bits,
             pixels: i.pixels.clone(),
+            pan: i.pan,
+            tilt: i.tilt,
         }
     }
 }
@@ -541,6 +558,8 @@ impl From<&ImageMsg> for CameraImage {
             height: i.height,
             bits: i.bits,
             pixels: i.pixels.clone(),
+            pan: i.pan,
+            tilt: i.tilt,
         }
     }
 }
@@ -802,6 +821,8 @@ mod tests {
                 height: 2,
                 bits: 12,
                 pixels: vec![0, 1, 4095, 7, 8, 9],
+                pan: 0.25,
+                tilt: -0.5,
             }],
         };
         let request = MotionRequest {

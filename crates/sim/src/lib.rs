@@ -8,6 +8,7 @@
 //! deterministic for a seed. [`true_hazard_grid`] gives the evaluation's ground-truth hazard map.
 
 pub mod hazard;
+pub mod navcam;
 pub mod raycast;
 pub mod render;
 pub mod scenes;
@@ -17,6 +18,7 @@ pub mod stereo_range;
 pub mod vehicle;
 
 pub use hazard::true_hazard_grid;
+pub use navcam::NavcamImaging;
 pub use raycast::{HeightField, RayHit};
 pub use sensors::{LidarModel, ProximityModel, RangeImagerModel, SensorModel};
 pub use simulator::{Fault, Simulator};

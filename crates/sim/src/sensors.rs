@@ -129,8 +129,10 @@ pub struct SensorModel {
     pub slip: SlipModel,
     /// Where the stereo pairs' range comes from (the LIDAR is always ray cast).
     pub range_source: RangeSource,
-    /// How the `stereo` range source images and correlates.
+    /// How the `stereo` range source images and correlates (also the sun and dust of every image).
     pub stereo: StereoImaging,
+    /// How the Navcam pair images on request.
+    pub navcam: crate::navcam::NavcamImaging,
 }
 
 impl Default for SensorModel {
@@ -222,6 +224,7 @@ impl Default for SensorModel {
             slip: SlipModel::default(),
             range_source: RangeSource::default(),
             stereo: StereoImaging::default(),
+            navcam: crate::navcam::NavcamImaging::default(),
         }
     }
 }

@@ -9,7 +9,7 @@
 //! seed, one stream per subsystem, so a run is reproducible and one sensor's draws do not shift
 //! another's.
 
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rovernav_core::{
     CameraImage, CameraKind, DriveGuard, NavCommand, OdometrySample, PointCloud, Pose2, Pose3,
@@ -17,6 +17,7 @@ use rovernav_core::{
 };
 use rovernav_terrain::Terrain;
 
+use crate::navcam;
 use crate::raycast::HeightField;
 use crate::sensors::{self, Proprioception, RangeGeometry, SensorModel, gaussian};
 use crate::stereo_range::{self, RangeSource};
@@ -68,6 +69,8 @@ pub struct Simulator {
     proprio: Proprioception,
     motion_rng: ChaCha8Rng,
     range_rng: ChaCha8Rng,
+    /// Sensor noise of the pictures (one draw per image pair).
+    image_rng: ChaCha8Rng,
     proximity_rng: ChaCha8Rng,
     faults: Faults,
     /// The proximity reading that stopped the current motion, if a guard did.
@@ -116,6 +119,7 @@ impl Simulator {
             motion_rng: stream(seed, 2),
             range_rng: stream(seed, 3),
             proximity_rng: stream(seed, 4),
+            image_rng: stream(seed, 5),
             faults: Faults::default(),
             guard_reading: None,
             terrain,
@@ -280,6 +284,10 @@ impl Simulator {
 
     /// Takes one range image.
     fn sense(&mut self, request: &SenseRequest, frame: &mut SensorFrame) {
+        if let SenseRequest::Navcam { pan, tilt } = *request {
+            self.take_pictures(pan, tilt, frame);
+            return;
+        }
         let (geometry, imager) = match *request {
             SenseRequest::Mast { pan } => {
                 (RangeGeometry::mast(&self.rover, &self.model, pan), &self.model.mast)
@@ -294,6 +302,7 @@ impl Simulator {
                 (RangeGeometry::body(&self.rover, &self.model, false), &self.model.body)
             }
             SenseRequest::Lidar { pan } => (RangeGeometry::lidar(&self.model, pan), &self.model.lidar.imager),
+            SenseRequest::Navcam { .. } => unreachable!("pictures are taken above"),
         };
         let stereo = self.model.range_source == RangeSource::Stereo && geometry.camera != CameraKind::Lidar;
         let mut cloud = if stereo {
@@ -312,6 +321,9 @@ impl Simulator {
                 height: capture.left.image.height(),
                 bits: 12,
                 pixels: capture.left.image.into_raw(),
+                // The wedge's pointing: bearing, and the middle of its elevation span.
+                pan: geometry.bearing,
+                tilt: 0.5 * (geometry.elevation_min + geometry.elevation_max),
             });
             // The navigators' wedge is the one the ray grid would have covered.
             PointCloud { wedge: geometry.wedge(imager), ..capture.cloud }
@@ -333,6 +345,27 @@ impl Simulator {
         self.proprio.elapse(&self.model, dt);
         self.sensing_actions += 1;
         frame.clouds.push(cloud);
+    }
+
+    /// Takes the Navcam pair at `pan` and `tilt` (rad): pictures, no range, not a sensing action.
+    fn take_pictures(&mut self, pan: f64, tilt: f64, frame: &mut SensorFrame) {
+        let seed: u64 = self.image_rng.random();
+        let pair = navcam::capture_pair(
+            &self.terrain,
+            &self.field,
+            &self.rover,
+            &self.truth,
+            &self.model.stereo,
+            &self.model.navcam,
+            pan,
+            tilt,
+            self.time,
+            seed,
+        );
+        frame.images.extend(pair);
+        let dt = self.model.navcam.capture_time_s.max(0.0);
+        self.time += dt;
+        self.proprio.elapse(&self.model, dt);
     }
 
     /// Moves the wheels: `centre` metres of signed centre-line wheel travel and `rotation`

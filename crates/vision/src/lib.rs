@@ -10,6 +10,7 @@ pub mod camera;
 pub mod codec;
 pub mod image;
 pub mod rectify;
+pub mod rig;
 pub mod stereo;
 pub mod tracking;
 

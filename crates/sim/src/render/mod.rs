@@ -12,7 +12,8 @@
 //! The rover's cameras are in [`rig`]: `Rig::camera(name, pan, tilt)` gives a body- or
 //! site-frame model, [`RigCamera::in_world`] moves it with the true pose.
 
-pub mod rig;
+/// The rover's camera calibration (in the vision crate: the autonomy knows it too).
+pub use rovernav_vision::rig;
 pub mod scene;
 pub mod sensor;
 pub mod shade;

@@ -120,6 +120,7 @@ mod tests {
             height: 2,
             bits: 12,
             pixels: vec![0, 1, 4095, 2048, 7, 100],
+            ..CameraImage::default()
         };
         let msg = RawImageMsg::of(&image);
         assert_eq!((msg.timestamp.sec, msg.timestamp.nsec), (12, 250_000_000));

@@ -338,8 +338,11 @@ pub struct SensorFrameMsg {
 /// The sensor name of a full-resolution mast image request.
 const MAST_FINE: &str = "mast_fine";
 
+/// The sensor name of a Navcam image-pair request.
+const NAVCAM: &str = "navcam";
+
 /// The sensor names a sensing request may carry.
-const SENSE_SENSORS: [&str; 5] = ["mast", MAST_FINE, "body_front", "body_rear", "lidar"];
+const SENSE_SENSORS: [&str; 6] = ["mast", MAST_FINE, "body_front", "body_rear", "lidar", NAVCAM];
 
 const CAMERAS: [CameraKind; 4] =
     [CameraKind::Mast, CameraKind::BodyFront, CameraKind::BodyRear, CameraKind::Lidar];
@@ -562,6 +565,9 @@ pub struct SenseRequestMsg {
     pub sensor: String,
     /// Pan angle for the mast and LIDAR (rad).
     pub pan: Option<f64>,
+    /// Tilt angle for the Navcam pair (rad, positive up).
+    #[serde(default)]
+    pub tilt: Option<f64>,
 }
 
 impl CommandMsg {
@@ -586,14 +592,15 @@ impl CommandMsg {
                 m.sense = requests
                     .iter()
                     .map(|r| {
-                        let (sensor, pan) = match *r {
-                            SenseRequest::Mast { pan } => (CameraKind::Mast.as_str(), Some(pan)),
-                            SenseRequest::MastFine { pan } => (MAST_FINE, Some(pan)),
-                            SenseRequest::BodyFront => (CameraKind::BodyFront.as_str(), None),
-                            SenseRequest::BodyRear => (CameraKind::BodyRear.as_str(), None),
-                            SenseRequest::Lidar { pan } => (CameraKind::Lidar.as_str(), Some(pan)),
+                        let (sensor, pan, tilt) = match *r {
+                            SenseRequest::Mast { pan } => (CameraKind::Mast.as_str(), Some(pan), None),
+                            SenseRequest::MastFine { pan } => (MAST_FINE, Some(pan), None),
+                            SenseRequest::BodyFront => (CameraKind::BodyFront.as_str(), None, None),
+                            SenseRequest::BodyRear => (CameraKind::BodyRear.as_str(), None, None),
+                            SenseRequest::Lidar { pan } => (CameraKind::Lidar.as_str(), Some(pan), None),
+                            SenseRequest::Navcam { pan, tilt } => (NAVCAM, Some(pan), Some(tilt)),
                         };
-                        SenseRequestMsg { sensor: sensor.into(), pan }
+                        SenseRequestMsg { sensor: sensor.into(), pan, tilt }
                     })
                     .collect();
             }
@@ -633,6 +640,10 @@ impl CommandMsg {
                             "body_front" => SenseRequest::BodyFront,
                             "body_rear" => SenseRequest::BodyRear,
                             "lidar" => SenseRequest::Lidar { pan: pan()? },
+                            NAVCAM => SenseRequest::Navcam {
+                                pan: pan()?,
+                                tilt: need(r.tilt, &format!("sense[{i}].tilt"))?,
+                            },
                             other => {
                                 return Err(format!("field `sense[{i}].sensor`: unknown sensor `{other}`"));
                             }
@@ -676,7 +687,8 @@ impl CommandMsg {
                             "sensing request",
                             &[
                                 ("sensor", enumeration("sensor", &SENSE_SENSORS)),
-                                ("pan", nullable(number("pan angle, body frame (rad); mast and lidar"))),
+                                ("pan", nullable(number("pan angle, body frame (rad); mast, lidar, navcam"))),
+                                ("tilt", nullable(number("tilt angle, positive up (rad); navcam"))),
                             ],
                         ),
                     ),
@@ -1122,6 +1134,7 @@ mod tests {
                 SenseRequest::BodyFront,
                 SenseRequest::BodyRear,
                 SenseRequest::Lidar { pan: -0.5 },
+                SenseRequest::Navcam { pan: 0.25, tilt: 0.75 },
             ]),
             NavCommand::Drive {
                 distance: -0.3,

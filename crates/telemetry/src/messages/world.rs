@@ -478,6 +478,8 @@ impl WorldMsg {
                     }
                 },
                 stereo: StereoImaging::default(),
+                // The pictures are logged themselves (`/camera/*`); their settings take the defaults.
+                navcam: rovernav_sim::NavcamImaging::default(),
             },
             start: Pose2::new(self.start.x, self.start.y, self.start.yaw),
             goal: Goal {

@@ -14,10 +14,10 @@
 //! mission start pose levelled (x along the start heading, origin on the ground at the start).
 //! [`RigCamera::in_world`] moves either to the world frame.
 
+use crate::Cahv;
+use crate::camera::Movable;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rovernav_core::{Pose3, RoverConfig};
-use rovernav_vision::Cahv;
-use rovernav_vision::camera::Movable;
 
 /// Names of every rig camera, pairs left before right.
 pub const CAMERA_NAMES: [&str; 8] = [
@@ -229,8 +229,8 @@ fn square(centre: Vector3<f64>, axis: Vector3<f64>, right: Vector3<f64>, half_fo
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::CameraModel;
     use nalgebra::Point3;
-    use rovernav_vision::CameraModel;
 
     #[test]
     fn pose_isometry_matches_pose3_transform() {
