@@ -34,6 +34,11 @@ pub struct HeightField {
     block_rows: usize,
     /// Maximum corner height of each block (+inf when a block holds nodata).
     block_max: Vec<f64>,
+    /// Patches per row: patch `i` in `-1..=cols - 1` is column `i + 1`.
+    patch_cols: usize,
+    /// Maximum corner height of each patch (+inf when a corner is nodata), so a patch the ray
+    /// clears costs one load.
+    patch_max: Vec<f32>,
 }
 
 /// A ray in patch-lattice coordinates: `u = (x - origin_x) / res - 0.5`, same for `v`, so
@@ -75,7 +80,25 @@ impl HeightField {
                 }
             }
         }
-        Self { block_cols, block_rows, block_max }
+        let (patch_cols, patch_rows) = (g.cols + 1, g.rows + 1);
+        let mut patch_max = vec![f32::INFINITY; patch_cols * patch_rows];
+        if g.cols > 0 && g.rows > 0 {
+            let h = |c: usize, r: usize| *dem.heights.get(c.min(g.cols - 1), r.min(g.rows - 1));
+            for (pr, row) in patch_max.chunks_mut(patch_cols).enumerate() {
+                // Patch (pc - 1, pr - 1) has corners at cells pc - 1 ..= pc, clamped.
+                let (r0, r1) = (pr.saturating_sub(1), pr);
+                for (pc, slot) in row.iter_mut().enumerate() {
+                    let (c0, c1) = (pc.saturating_sub(1), pc);
+                    let corners = [h(c0, r0), h(c1, r0), h(c0, r1), h(c1, r1)];
+                    *slot = if corners.iter().any(|v| v.is_nan()) {
+                        f32::INFINITY
+                    } else {
+                        corners.into_iter().fold(f32::NEG_INFINITY, f32::max)
+                    };
+                }
+            }
+        }
+        Self { block_cols, block_rows, block_max, patch_cols, patch_max }
     }
 
     /// Casts a ray from `origin` along the unit vector `dir` up to `max_range` (m).
@@ -120,21 +143,23 @@ impl HeightField {
             if self.block_is_below(bc, br, ray.z(ta).min(ray.z(tb))) {
                 return false;
             }
-            walk_cells(&ray, ta, tb, 1.0, 0.0, |i, j, t0, t1| match examine_patch(dem, &ray, i, j, t0, t1) {
-                PatchResult::Clear => false,
-                // A ray from outside the DEM entering beneath its surface crosses no modelled
-                // surface: no return.
-                PatchResult::Hit(t) if t_in > 0.0 && t <= t_in => {
-                    outcome = Some(f64::NAN);
-                    true
-                }
-                PatchResult::Hit(t) => {
-                    outcome = Some(t);
-                    true
-                }
-                PatchResult::NoData => {
-                    outcome = Some(f64::NAN);
-                    true
+            walk_cells(&ray, ta, tb, 1.0, 0.0, |i, j, t0, t1| {
+                match self.examine_patch(dem, &ray, i, j, t0, t1) {
+                    PatchResult::Clear => false,
+                    // A ray from outside the DEM entering beneath its surface crosses no modelled
+                    // surface: no return.
+                    PatchResult::Hit(t) if t_in > 0.0 && t <= t_in => {
+                        outcome = Some(f64::NAN);
+                        true
+                    }
+                    PatchResult::Hit(t) => {
+                        outcome = Some(t);
+                        true
+                    }
+                    PatchResult::NoData => {
+                        outcome = Some(f64::NAN);
+                        true
+                    }
                 }
             })
         });
@@ -152,6 +177,27 @@ impl HeightField {
             br.clamp(0, self.block_rows as i64 - 1) as usize,
         );
         z > self.block_max[br * self.block_cols + bc]
+    }
+
+    /// Looks for the first crossing of the ray with bilinear patch (i, j) for `t` in `[t0, t1]`.
+    fn examine_patch(&self, dem: &Dem, ray: &LatticeRay, i: i64, j: i64, t0: f64, t1: f64) -> PatchResult {
+        let g = dem.geometry();
+        let col = |k: i64| k.clamp(0, g.cols as i64 - 1) as usize;
+        let row = |k: i64| k.clamp(0, g.rows as i64 - 1) as usize;
+        // A bilinear patch never rises above its highest corner.
+        let (pc, pr) = ((i + 1).clamp(0, g.cols as i64) as usize, (j + 1).clamp(0, g.rows as i64) as usize);
+        let top = self.patch_max[pr * self.patch_cols + pc];
+        if ray.z(t0).min(ray.z(t1)) > top as f64 {
+            return PatchResult::Clear;
+        }
+        let h00 = *dem.heights.get(col(i), row(j)) as f64;
+        let h10 = *dem.heights.get(col(i + 1), row(j)) as f64;
+        let h01 = *dem.heights.get(col(i), row(j + 1)) as f64;
+        let h11 = *dem.heights.get(col(i + 1), row(j + 1)) as f64;
+        if !(h00.is_finite() && h10.is_finite() && h01.is_finite() && h11.is_finite()) {
+            return PatchResult::NoData;
+        }
+        patch_crossing(ray, [h00, h10, h01, h11], i, j, t0, t1)
     }
 }
 
@@ -223,22 +269,16 @@ fn walk_cells(
     }
 }
 
-/// Looks for the first crossing of the ray with bilinear patch (i, j) for `t` in `[t0, t1]`.
-fn examine_patch(dem: &Dem, ray: &LatticeRay, i: i64, j: i64, t0: f64, t1: f64) -> PatchResult {
-    let g = dem.geometry();
-    let col = |k: i64| k.clamp(0, g.cols as i64 - 1) as usize;
-    let row = |k: i64| k.clamp(0, g.rows as i64 - 1) as usize;
-    let h00 = *dem.heights.get(col(i), row(j)) as f64;
-    let h10 = *dem.heights.get(col(i + 1), row(j)) as f64;
-    let h01 = *dem.heights.get(col(i), row(j + 1)) as f64;
-    let h11 = *dem.heights.get(col(i + 1), row(j + 1)) as f64;
-    if !(h00.is_finite() && h10.is_finite() && h01.is_finite() && h11.is_finite()) {
-        return PatchResult::NoData;
-    }
-    // A bilinear patch never rises above its highest corner.
-    if ray.z(t0).min(ray.z(t1)) > h00.max(h10).max(h01).max(h11) {
-        return PatchResult::Clear;
-    }
+/// The first crossing of the ray with the bilinear patch (i, j) of corner heights `[h00, h10,
+/// h01, h11]` for `t` in `[t0, t1]`, the ray below the patch's highest corner somewhere there.
+fn patch_crossing(
+    ray: &LatticeRay,
+    [h00, h10, h01, h11]: [f64; 4],
+    i: i64,
+    j: i64,
+    t0: f64,
+    t1: f64,
+) -> PatchResult {
     // Clearance f(s) = z(t0 + s) - h(t0 + s) = q2 s^2 + q1 s + q0 on s in [0, len].
     let a0 = ray.u0 + ray.du * t0 - i as f64;
     let b0 = ray.v0 + ray.dv * t0 - j as f64;
@@ -264,8 +304,32 @@ fn examine_patch(dem: &Dem, ray: &LatticeRay, i: i64, j: i64, t0: f64, t1: f64) 
     } else {
         return PatchResult::Clear;
     };
+    PatchResult::Hit(t0 + first_root(q2, q1, q0, bracket_end))
+}
+
+/// The root of `f(s) = q2 s^2 + q1 s + q0` in `(0, end]`, given `f(0) > 0 >= f(end)` and a
+/// single crossing there: in closed form (the cancellation-free pair `q / q2`, `q0 / q` with
+/// `q = -(q1 + sign(q1) sqrt(q1^2 - 4 q2 q0)) / 2`, Numerical Recipes 5.6), falling back to
+/// bisection when rounding puts neither root inside the bracket.
+fn first_root(q2: f64, q1: f64, q0: f64, end: f64) -> f64 {
+    let disc = (q1 * q1 - 4.0 * q2 * q0).max(0.0);
+    let q = -0.5 * (q1 + disc.sqrt().copysign(q1));
+    let inside = |s: f64| (0.0..=end).contains(&s);
+    let (r1, r2) = (q / q2, q0 / q);
+    match (inside(r1), inside(r2)) {
+        (true, true) => r1.min(r2),
+        (true, false) => r1,
+        (false, true) => r2,
+        (false, false) => bisect(q2, q1, q0, end),
+    }
+}
+
+/// The crossing of `f(s) = q2 s^2 + q1 s + q0` in `(0, end]` by bisection to
+/// `BISECTION_TOLERANCE`, given `f(0) > 0 >= f(end)`.
+fn bisect(q2: f64, q1: f64, q0: f64, end: f64) -> f64 {
+    let f = |s: f64| (q2 * s + q1) * s + q0;
     // f(lo) > 0 >= f(hi), and f has no root before lo in this patch.
-    let (mut lo, mut hi) = (0.0, bracket_end);
+    let (mut lo, mut hi) = (0.0, end);
     while hi - lo > BISECTION_TOLERANCE {
         let mid = 0.5 * (lo + hi);
         if f(mid) > 0.0 {
@@ -274,7 +338,7 @@ fn examine_patch(dem: &Dem, ray: &LatticeRay, i: i64, j: i64, t0: f64, t1: f64) 
             hi = mid;
         }
     }
-    PatchResult::Hit(t0 + 0.5 * (lo + hi))
+    0.5 * (lo + hi)
 }
 
 #[cfg(test)]
@@ -338,6 +402,38 @@ mod tests {
         assert!((hit.point[0] - (-1.0 + 1.0 / d.tan())).abs() < 1e-9 && hit.point[2].abs() < 1e-9);
         // From below the DEM's level outside it: passes under the model, no return.
         assert!(hf.cast(&dem, [-1.0, 0.5, -0.1], [1.0, 0.0, 0.0], 10.0).is_none());
+    }
+
+    #[test]
+    fn closed_form_root_equals_bisection() {
+        // Random parabolas through a crossing at a known root r: f(s) = (s - r) (q2' s + k)
+        // with f(0) > 0 >= f(end); bisection is the second implementation.
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for _ in 0..20_000 {
+            let end = 0.01 + next() * 0.2;
+            let r = next() * end;
+            let (a, k) = ((next() - 0.5) * 400.0, -(0.05 + next() * 3.0));
+            let (q2, q1, q0) = (a, k - a * r, -k * r);
+            let f = |x: f64| (q2 * x + q1) * x + q0;
+            if !(q0 > 0.0 && f(end) <= 0.0) {
+                continue;
+            }
+            let (fast, slow) = (first_root(q2, q1, q0, end), bisect(q2, q1, q0, end));
+            assert!((fast - slow).abs() < 1e-9, "q = ({q2}, {q1}, {q0}) end {end}: {fast} vs {slow}");
+            assert!((fast - r).abs() < 1e-9, "root {r} found at {fast}");
+            checked += 1;
+        }
+        assert!(checked > 5_000, "only {checked} brackets");
+        // A straight line (q2 = 0) and a double root at the bracket's end.
+        assert!((first_root(0.0, -2.0, 0.1, 0.2) - 0.05).abs() < 1e-15);
+        assert!((first_root(1.0, -0.2, 0.01, 0.1) - 0.1).abs() < 1e-7);
     }
 
     #[test]
