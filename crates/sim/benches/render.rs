@@ -1,6 +1,8 @@
 //! Renderer speed: a 1024 x 1024 Navcam image of a 30 m Mars yard, with and without shadow
-//! rays, against the baseline of casting the same primary rays alone (the range imager's ray
-//! cast, no shading, no sensor), all on the rayon pool of the machine and on one thread.
+//! rays, against the baseline of casting the same primary rays alone with the plain reference
+//! caster (`HeightField::cast_reference`: corners of every visited patch, bisection; no
+//! shading, no sensor), and the same primary rays with the caster the renderer uses; all on
+//! the rayon pool of the machine, the full render also on one thread.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Point2;
@@ -29,22 +31,26 @@ fn benches(c: &mut Criterion) {
     group.sample_size(10);
     // Throughput in pixels: criterion prints megapixels per second.
     group.throughput(Throughput::Elements((world.width() * world.height()) as u64));
-    group.bench_function("baseline: primary ray casts only", |b| {
-        b.iter(|| {
-            (0..world.height())
-                .into_par_iter()
-                .map(|row| {
-                    (0..world.width())
-                        .filter_map(|col| {
-                            let ray = world.unproject(&Point2::new(col as f64, row as f64));
-                            let d = ray.direction.into_inner();
-                            field.cast(&terrain.dem, ray.origin.coords.into(), d.into(), 1e5)
-                        })
-                        .count()
-                })
-                .sum::<usize>()
-        })
-    });
+    let primary = |reference: bool| {
+        (0..world.height())
+            .into_par_iter()
+            .map(|row| {
+                (0..world.width())
+                    .filter_map(|col| {
+                        let ray = world.unproject(&Point2::new(col as f64, row as f64));
+                        let (o, d) = (ray.origin.coords.into(), ray.direction.into_inner().into());
+                        if reference {
+                            field.cast_reference(&terrain.dem, o, d, 1e5)
+                        } else {
+                            field.cast(&terrain.dem, o, d, 1e5)
+                        }
+                    })
+                    .count()
+            })
+            .sum::<usize>()
+    };
+    group.bench_function("baseline: primary ray casts only, reference caster", |b| b.iter(|| primary(true)));
+    group.bench_function("primary ray casts only", |b| b.iter(|| primary(false)));
     group.bench_function("render without shadows", |b| {
         b.iter(|| render(&scene, &world, "navcam_left", &no_shadows, 1))
     });
