@@ -19,6 +19,7 @@
 //! - Magnification and roll are one similarity transform (scale and in-plane rotation); the
 //!   perspective change of a tilted surface is not modelled (small at 10 % range steps).
 
+pub mod approach;
 pub mod exposure;
 pub mod ncc;
 pub mod point_stereo;
@@ -30,6 +31,7 @@ use nalgebra::{Isometry3, Point2, Point3};
 use crate::camera::CameraModel;
 use crate::image::GreyF32;
 
+pub use approach::{Approach, ApproachError, ApproachParams, Decision, Designation, NavcamPair, Observation};
 pub use exposure::{Exposure, auto_exposure};
 pub use ncc::{Centring, Peak, ScoreMap, Window, find_peak, score_map};
 pub use point_stereo::{PointRange, PointStereoParams, point_stereo};
