@@ -7,9 +7,10 @@
 //! quadratic in the ray parameter, and so is the ray's clearance above the surface. The caster
 //! marches the ray patch by patch (a grid traversal, so no patch is ever skipped however thin),
 //! finds the first patch where the clearance quadratic reaches zero (end points and the vertex of
-//! the parabola bound it exactly) and refines the crossing by bisection. A ray therefore never
-//! passes through terrain. A coarse grid of per-block maximum heights lets the march skip blocks
-//! the ray flies over.
+//! the parabola bound it exactly) and solves that quadratic for the crossing in closed form
+//! (bisection only when rounding puts no root inside the bracket). A ray therefore never passes
+//! through terrain. A coarse grid of per-block maximum heights lets the march skip blocks the
+//! ray flies over, and a grid of per-patch maxima makes a patch it clears cost one load.
 
 use rovernav_terrain::Dem;
 
