@@ -3,6 +3,11 @@
 //! sky ... and then determines if there are high variance regions within the sky."
 //!
 //! Steps (the paper names the two stages; the rest is rovernav's):
+//! 0. A block-compressed image ([`crate::deblock`] finds the 8x8 grid) is deblocked first: its
+//!    block means interpolated, so the block edges are not variance. Its noise is then measured
+//!    from differences one block apart, the band-pass's large box and the statistics' blocks
+//!    are wider (`deblocked_*` in [`CloudParams`]): the quantiser keeps structure at the block
+//!    scale and above only, so a cloud fainter than a few per cent can be lost with its texture.
 //! 1. The image reduced to the working size and median-filtered (dead pixels); the sky from [`crate::sky`], shrunk by a margin below which the horizon's own edge and
 //!    the hazed skyline would count as variance.
 //! 2. The sky's smooth brightness (brighter towards the horizon and the sun) is removed: a
@@ -26,6 +31,7 @@ use nalgebra::{DMatrix, DVector};
 use rovernav_vision::image::GreyF32;
 use serde::Serialize;
 
+use crate::deblock::{BLOCK, deblocked, find_block_grid};
 use crate::plane::{Plane, factor_for, quantile, robust_sigma};
 use crate::sky::SkyMask;
 
@@ -48,6 +54,12 @@ pub struct CloudParams {
     pub min_contrast: f32,
     /// Region strength needed for a cloud (summed block excess, in thresholds).
     pub min_strength: f32,
+    /// Block-compressed images (deblocked first): radius of the large box of the band-pass.
+    pub deblocked_large_radius: usize,
+    /// Block-compressed images: block side of the variance statistics.
+    pub deblocked_block: usize,
+    /// Block-compressed images: the block means' noise sd over this is the band-pass noise.
+    pub deblocked_noise_divisor: f32,
 }
 
 impl Default for CloudParams {
@@ -61,6 +73,9 @@ impl Default for CloudParams {
             noise_factor: 2.5,
             min_contrast: 0.0025,
             min_strength: 1.0,
+            deblocked_large_radius: 24,
+            deblocked_block: 24,
+            deblocked_noise_divisor: 1.2,
         }
     }
 }
@@ -103,7 +118,13 @@ pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> Cl
         return none(0.0);
     }
     let f = factor_for(w, h, params.max_side);
-    let p = Plane::prepared(image, f);
+    // A block-compressed image: its block edges removed, its noise measured one block apart.
+    let grid = find_block_grid(image);
+    let p = match &grid {
+        Some(g) => Plane::prepared(&deblocked(image, g), f),
+        None => Plane::prepared(image, f),
+    };
+    let lag = if grid.is_some() { (BLOCK as f32 / f as f32).round().max(1.0) as usize } else { 1 };
     let (pw, ph) = (p.width, p.height);
     let margin = (params.horizon_margin * ph as f32).ceil() as usize;
     // A working pixel is searched when its whole block of image columns is sky to the margin.
@@ -125,18 +146,25 @@ pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> Cl
     }
     let Some(residual) = relative_residual(&p, &mask) else { return none(searched) };
     let small = residual.masked_plane_fit(&mask, params.small_radius);
-    let large = residual.masked_plane_fit(&mask, params.large_radius);
+    // A deblocked image keeps structure at the block scale and above only: a wider band and
+    // larger blocks average the block means' quantisation noise.
+    let (large_radius, b) = match grid {
+        Some(_) => (params.deblocked_large_radius, params.deblocked_block.max(2)),
+        None => (params.large_radius, params.block.max(2)),
+    };
+    let large = residual.masked_plane_fit(&mask, large_radius);
     let band: Vec<f32> = small.data.iter().zip(&large.data).map(|(a, b)| a - b).collect();
-    // Pixel noise from horizontal neighbour differences inside the sky (sd of one pixel).
+    // Pixel noise from horizontal neighbour differences inside the sky (sd of one pixel); in
+    // a deblocked image, from differences one block apart (the block means' noise).
     let diffs = (0..ph).flat_map(|y| {
         let (r, m) = (&residual.data[y * pw..(y + 1) * pw], &mask[y * pw..(y + 1) * pw]);
-        (1..pw).filter(move |&x| m[x] > 0.0 && m[x - 1] > 0.0).map(move |x| r[x] - r[x - 1])
+        (lag..pw).filter(move |&x| m[x] > 0.0 && m[x - lag] > 0.0).map(move |x| r[x] - r[x - lag])
     });
     let pixel_sd = robust_sigma(diffs) / std::f32::consts::SQRT_2;
-    let box_n = (2 * params.small_radius + 1) as f32;
+    let box_n =
+        if grid.is_some() { params.deblocked_noise_divisor } else { (2 * params.small_radius + 1) as f32 };
     let threshold = (params.noise_factor * pixel_sd / box_n).max(params.min_contrast);
     // Block statistics.
-    let b = params.block.max(2);
     let (bw, bh) = (pw.div_ceil(b), ph.div_ceil(b));
     let mut excess = vec![0f32; bw * bh];
     let mut contrast = vec![0f32; bw * bh];
@@ -333,6 +361,41 @@ mod tests {
                     && py <= (r.y + r.height) as f32
             };
             assert!(inside(cx, cy), "region {r:?} misses the cloud at ({cx}, {cy})");
+        }
+    }
+
+    /// The image through the renderer's block codec (8x8 DCT, JPEG table) at `quality`.
+    pub(crate) fn compressed(img: &GreyF32, quality: u8) -> GreyF32 {
+        let mut dn: Vec<u16> = img.as_raw().iter().map(|v| v.round().clamp(0.0, 4095.0) as u16).collect();
+        rovernav_sim::render::sensor::compress(&mut dn, img.width() as usize, quality);
+        GreyF32::from_fn(img.width(), img.height(), |x, y| Luma([dn[(y * img.width() + x) as usize] as f32]))
+    }
+
+    #[test]
+    fn block_compressed_skies_keep_their_verdicts() {
+        // Quality 75: the clear skies' block edges (0.5 % steps) are no cloud, 5 % and 8 % clouds
+        // stay (a 3 % one does not: the quantiser keeps too little of its texture).
+        let params = CloudParams::default();
+        for seed in 0..4 {
+            let img = compressed(&sky_image(None, seed), 75);
+            assert!(crate::deblock::find_block_grid(&img).is_some());
+            let sky = segment_sky(&img, &SkyParams::default());
+            let d = detect_clouds(&img, &sky, &params);
+            assert!(!d.cloud, "compressed clear sky {seed}: {d:?}");
+        }
+        for (c, cx, cy) in [(0.05, 100.0, 60.0), (0.08, 220.0, 100.0)] {
+            let img = compressed(&sky_image(Some((c, cx, cy)), 9), 75);
+            let sky = segment_sky(&img, &SkyParams::default());
+            let d = detect_clouds(&img, &sky, &params);
+            assert!(d.cloud, "compressed cloud contrast {c}: {d:?}");
+            let r = &d.regions[0];
+            assert!(
+                (r.x as f32) <= cx
+                    && cx <= (r.x + r.width) as f32
+                    && (r.y as f32) <= cy
+                    && cy <= (r.y + r.height) as f32,
+                "region {r:?} misses the cloud at ({cx}, {cy})"
+            );
         }
     }
 

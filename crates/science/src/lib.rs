@@ -16,6 +16,7 @@
 //!   (section 5, introduction).
 
 pub mod cloud;
+pub mod deblock;
 pub mod dust_devil;
 pub mod plane;
 pub mod sky;

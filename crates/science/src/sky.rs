@@ -122,13 +122,34 @@ pub fn segment_sky(image: &GreyF32, params: &SkyParams) -> SkyMask {
         })
         .collect();
     // Leading fill of each column: pixels below 20 % of the bright level (a mosaic's black
-    // fill and its grid lines; a sky is never that dark next to its image's bright end).
+    // fill and its grid lines; a sky is never that dark next to its image's bright end). The
+    // data start where a run of FILL_RUN data rows does (or the horizon comes first): the
+    // labels printed in a mosaic's fill are bright but only a few rows tall. Then a 5-column
+    // running median, as for the horizon.
     let bright = quantile(image.as_raw().iter().copied(), 0.99).max(1e-6);
-    let top: Vec<u32> = (0..w)
-        .zip(&horizon)
-        .map(|(x, &hz)| (0..hz).find(|&y| image.get_pixel(x, y)[0] > 0.2 * bright).unwrap_or(hz))
-        .collect();
+    let mut top: Vec<usize> =
+        (0..w).zip(&horizon).map(|(x, &hz)| data_start(image, x, hz, 0.2 * bright) as usize).collect();
+    // A grid line drawn down through the fill is one column of data from row 0.
+    median_across_columns(&mut top, 2);
+    let top: Vec<u32> = top.iter().zip(&horizon).map(|(&t, &hz)| (t as u32).min(hz)).collect();
     SkyMask { width: w, height: h, horizon, top, threshold }
+}
+
+/// Consecutive data rows that mark the start of a column's data below a mosaic's fill.
+const FILL_RUN: u32 = 16;
+
+/// The first row of column `x` from which FILL_RUN rows (or all rows to `horizon`) are above
+/// `level`; `horizon` when there is none.
+fn data_start(image: &GreyF32, x: u32, horizon: u32, level: f32) -> u32 {
+    let mut start = 0;
+    for y in 0..horizon {
+        if image.get_pixel(x, y)[0] <= level {
+            start = y + 1;
+        } else if y + 1 - start >= FILL_RUN {
+            return start;
+        }
+    }
+    start.min(horizon)
 }
 
 /// Per working pixel, how much it looks like ground (0..1, `None` where there is no data: a

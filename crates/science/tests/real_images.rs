@@ -52,6 +52,13 @@ fn pano_sky_lies_above_the_skyline() {
     assert!(sky > ground + 20.0, "sky {sky:.0} vs ground below {ground:.0}");
     // No sky in the lower half of the mosaic.
     assert!(mask.horizon.iter().all(|&h| h < 900));
+    // The sky's data start below the fill, also under the fill's printed labels (glyphs a few
+    // rows tall that once started the sky at row 2 and read as a cloud at x 4284..4536).
+    let fill_rows = (4480..4520).filter(|&x| mask.top[x] < 20).count();
+    assert_eq!(fill_rows, 0, "tops {:?}", &mask.top[4480..4520]);
+    // The sol-1051 sky is clear to a person: no cloud, also across the frames' seams.
+    let clouds = detect_clouds(&image, &mask, &CloudParams::default());
+    assert!(!clouds.cloud, "{clouds:?}");
 }
 
 /// The MSL Navcam EDR looks down at a gravel plain: a person sees at most a strip of sky at the
