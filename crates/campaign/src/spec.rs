@@ -35,8 +35,10 @@ pub struct CampaignSpec {
     /// campaign seed).
     #[serde(default)]
     pub first_terrain_seed: Option<u64>,
-    /// Navigator registry names, or `["all"]` for every registered navigator.
-    #[serde(default = "default_navigators")]
+    /// Navigator registry names, or `["all"]` for every registered combination; an entry may
+    /// also choose options, `{ navigator = "gestalt", global_planner = "field-dstar" }`, read as
+    /// the combination's name (`gestalt+field-dstar`).
+    #[serde(default = "default_navigators", deserialize_with = "navigator_names_or_choices")]
     pub navigators: Vec<String>,
     /// Parameters per navigator (`[navigator_params.<name>]`, as a mission's
     /// `[navigator_params]`); a navigator without an entry keeps its defaults.
@@ -162,6 +164,36 @@ fn default_trials() -> usize {
 fn default_navigators() -> Vec<String> {
     vec!["all".into()]
 }
+/// One `navigators` entry: a name, or a navigator with its options.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum NavigatorItem {
+    /// A registry name.
+    Name(String),
+    /// A navigator under a chosen global planner.
+    Choice {
+        /// Registry name.
+        navigator: String,
+        /// The global planner.
+        global_planner: Option<String>,
+    },
+}
+
+/// The `navigators` list with option tables read as their combinations' names.
+fn navigator_names_or_choices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<String>, D::Error> {
+    let items = Vec::<NavigatorItem>::deserialize(d)?;
+    items
+        .into_iter()
+        .map(|item| match item {
+            NavigatorItem::Name(name) => Ok(name),
+            NavigatorItem::Choice { navigator, global_planner } => rovernav_navigation::registry()
+                .navigator(&navigator, global_planner.as_deref())
+                .map(|choice| choice.spec())
+                .map_err(serde::de::Error::custom),
+        })
+        .collect()
+}
+
 fn default_localizer() -> String {
     Mission::default_mission().localizer
 }
@@ -253,7 +285,7 @@ impl CampaignSpec {
     /// The navigator names this campaign runs, with `all` expanded, in the given order.
     pub fn navigator_names(&self) -> Vec<String> {
         if self.navigators.iter().any(|n| n == "all") {
-            return rovernav_navigation::NAVIGATOR_NAMES.iter().map(|s| s.to_string()).collect();
+            return rovernav_navigation::navigator_names().iter().map(|s| s.to_string()).collect();
         }
         self.navigators.clone()
     }
@@ -283,13 +315,12 @@ impl CampaignSpec {
         if self.navigators.is_empty() {
             return bad("navigators", "name at least one navigator (or \"all\")".into());
         }
-        let known = rovernav_navigation::NAVIGATOR_NAMES;
+        let registry = rovernav_navigation::registry();
         for name in &self.navigators {
-            if name != "all" && !known.contains(&name.as_str()) {
-                return bad(
-                    "navigators",
-                    format!("unknown navigator `{name}` (known: all, {})", known.join(", ")),
-                );
+            if name != "all"
+                && let Err(e) = registry.navigator(name, None)
+            {
+                return bad("navigators", e.to_string().replace("(known: ", "(known: all, "));
             }
         }
         let names = self.navigator_names();
@@ -316,12 +347,8 @@ impl CampaignSpec {
         if let Err((field, why)) = self.sensors.check() {
             return bad(&format!("sensors.{field}"), why.into());
         }
-        let localizers = rovernav_localization::LOCALIZER_NAMES;
-        if !localizers.contains(&self.localizer.as_str()) {
-            return bad(
-                "localizer",
-                format!("unknown localizer `{}` (known: {})", self.localizer, localizers.join(", ")),
-            );
+        if let Err(e) = registry.check_localizer(&self.localizer, &Default::default()) {
+            return bad("localizer", e.to_string());
         }
         if !positive(self.time_limit_s) {
             return bad("time_limit_s", "must be a positive number of seconds".into());
@@ -413,12 +440,28 @@ mod tests {
     #[test]
     fn builtin_and_shipped_campaigns_parse() {
         let b = CampaignSpec::builtin();
-        assert_eq!(b.navigator_names().len(), rovernav_navigation::NAVIGATOR_NAMES.len());
+        assert_eq!(b.navigator_names().len(), rovernav_navigation::navigator_names().len());
         for file in ["quick.toml", "full.toml", "default.toml", "roverbug-yard.toml"] {
             let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../campaigns").join(file);
             let spec = CampaignSpec::from_file(&path).unwrap_or_else(|e| panic!("{e}"));
             assert!(spec.trials > 0, "{file}");
         }
+    }
+
+    #[test]
+    fn navigators_may_be_chosen_with_options_and_old_names_still_work() {
+        let spec = CampaignSpec::from_toml(
+            "navigators = [\"gestalt+field-dstar\", { navigator = \"grid\", global_planner = \"dstar-lite\" }, \"sr2+look-back\"]",
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(spec.navigator_names(), ["gestalt+field-dstar", "mrpta", "sr2+look-back"]);
+        let e = err("navigators = [{ navigator = \"gestalt\", global_planner = \"astar\" }]");
+        assert!(e.contains("c.toml") && e.contains("no global planner `astar`"), "{e}");
+        let e = err("navigators = [\"warp\"]");
+        assert!(e.contains("known: all, grid, gestalt") && !e.contains('\n'), "{e}");
+        let e = err("localizer = \"gps\"");
+        assert!(e.contains("unknown localizer `gps`") && e.contains("ekf-ml-targets"), "{e}");
     }
 
     #[test]

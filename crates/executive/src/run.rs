@@ -182,8 +182,8 @@ impl RunSettings {
     /// The settings of a mission file.
     pub fn of(mission: &Mission) -> Self {
         Self {
-            navigator: mission.navigator.clone(),
-            localizer: mission.localizer.clone(),
+            navigator: mission.navigator_spec(),
+            localizer: mission.localizer_spec(),
             seed: mission.seed,
             time_limit_s: mission.time_limit_s,
             max_cycles: mission.max_cycles,
@@ -482,25 +482,24 @@ pub(crate) fn algorithms(
     mission: &RunSettings,
     origin: &str,
 ) -> Result<(Box<dyn Navigator>, BoxedLocalizer), RunError> {
-    let navigator: Box<dyn Navigator> = rovernav_navigation::navigator_with_params(
-        &registry_name(mission),
-        &world.rover,
-        &mission.navigator_params,
-    )
-    .map_err(|e| match e {
-        rovernav_navigation::NavigatorError::UnknownNavigator { name } => RunError::UnknownNavigator {
-            origin: origin.into(),
-            name,
-            known: rovernav_navigation::NAVIGATOR_NAMES.join(", "),
-        },
-        other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
-    })?;
+    let registry = rovernav_navigation::registry();
+    let navigator: Box<dyn Navigator> =
+        registry.build_navigator(&registry_name(mission), &world.rover, &mission.navigator_params).map_err(
+            |e| match e {
+                rovernav_navigation::NavigatorError::UnknownNavigator { name, known } => {
+                    RunError::UnknownNavigator { origin: origin.into(), name, known: known.join(", ") }
+                }
+                other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
+            },
+        )?;
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
-        .ok_or_else(|| RunError::UnknownLocalizer {
-            origin: origin.into(),
-            name: mission.localizer.clone(),
-            known: rovernav_localization::LOCALIZER_NAMES.join(", "),
+    let no_params = rovernav_navigation::NavigatorParams::new();
+    let localizer =
+        registry.build_localizer(&mission.localizer, &world.rover, initial, &no_params).map_err(|e| match e {
+            rovernav_navigation::NavigatorError::UnknownLocalizer { name, known } => {
+                RunError::UnknownLocalizer { origin: origin.into(), name, known: known.join(", ") }
+            }
+            other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
         })?;
     Ok((navigator, localizer))
 }
@@ -510,12 +509,7 @@ pub(crate) fn algorithms(
 /// terrain crossed (issue 5 item 5) and the name does not ask for it already. One name for
 /// the first leg and the later ones, which the navigator component builds afresh.
 fn registry_name(mission: &RunSettings) -> String {
-    let suffix = rovernav_navigation::look_back::LOOK_BACK_SUFFIX;
-    if rovernav_localization::matches_terrain(&mission.localizer) && !mission.navigator.ends_with(suffix) {
-        format!("{}{suffix}", mission.navigator)
-    } else {
-        mission.navigator.clone()
-    }
+    rovernav_navigation::registry().decorated(&mission.navigator, &mission.localizer)
 }
 
 /// The report's executive part: final component states, the diagnosed fault and each task's

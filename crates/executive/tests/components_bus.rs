@@ -49,7 +49,7 @@ fn direct_loop(world: &World, s: &RunSettings) -> Reference {
     let mut navigator = rovernav_navigation::navigator_by_name(&s.navigator, &world.rover).unwrap();
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
     let mut localizer =
-        rovernav_localization::localizer_by_name(&s.localizer, &world.rover, initial).unwrap();
+        rovernav_navigation::localizer_by_name(&s.localizer, &world.rover, initial).unwrap();
     let mut sim = Simulator::new(
         world.terrain.clone(),
         world.rover.clone(),
@@ -192,7 +192,7 @@ fn every_navigator_on_three_default_yards_gives_the_direct_loops_run() {
     // Fault protection must never fire on a healthy rover: any navigator, same run as without it
     // (a navigator that keeps meeting the terrain is halted by the rule the reference applies).
     for seed in 1..=3 {
-        for navigator in rovernav_navigation::NAVIGATOR_NAMES {
+        for navigator in rovernav_navigation::navigator_names() {
             let mission = Mission { navigator: navigator.to_string(), seed, ..Mission::default_mission() };
             let out = assert_matches_direct_loop(&mission);
             let fault = out.report.fault.as_ref();
@@ -207,7 +207,7 @@ fn runtime(mission: &Mission) -> Runtime {
     let rover = world.rover.clone();
     let nav = rovernav_navigation::navigator_by_name("astar-grid", &rover).unwrap();
     let start = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let loc = rovernav_localization::localizer_by_name("dead-reckoning", &rover, start).unwrap();
+    let loc = rovernav_navigation::localizer_by_name("dead-reckoning", &rover, start).unwrap();
     let sim = Simulator::new(world.terrain, rover.clone(), world.sensor_model, world.start, mission.seed);
     let mut rt = Runtime::new(Bus::in_process()).unwrap();
     rt.add(Box::new(NavigatorComponent::new(nav, "astar-grid", rover.clone()))).unwrap();

@@ -3,7 +3,7 @@
 
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
 use rovernav_executive::{RunSettings, World, run_world};
-use rovernav_navigation::NAVIGATOR_NAMES;
+use rovernav_navigation::navigator_names;
 use rovernav_sim::SensorModel;
 use rovernav_terrain::{Dem, Terrain};
 
@@ -23,7 +23,7 @@ fn inside(p: Point2, zone: &[Point2]) -> bool {
 fn no_navigator_enters_a_keep_out_zone_across_its_way() {
     let zone =
         vec![Point2::new(8.0, 2.5), Point2::new(11.0, 2.5), Point2::new(11.0, 9.5), Point2::new(8.0, 9.5)];
-    for name in NAVIGATOR_NAMES {
+    for name in navigator_names() {
         let world = World {
             terrain: Terrain { dem: Dem::flat(200, 120, 0.1, 0.0), rocks: vec![] },
             rover: RoverConfig::default(),

@@ -10,7 +10,9 @@
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
 //!
-//! Localisers are chosen by name through [`localizer_by_name`]. A typical cycle: feed each
+//! Localisers are chosen by name through the registry (`rovernav_navigation::registry`, which
+//! lists them with their `[localizer_params]`; [`localizer_by_name`] builds the built-in ones
+//! without parameters). A typical cycle: feed each
 //! command's [`rovernav_core::SensorFrame`] to the localiser; after a move, build the local
 //! elevation map, match it with [`MlMatcher::match_map`] in a [`SearchWindow`] from the
 //! estimate, and fuse the result with [`Ekf::fuse_fix`].
@@ -33,42 +35,17 @@ pub use target::{TargetParams, select_target};
 
 use rovernav_core::{Localizer, Pose3, RoverConfig};
 
-/// Names accepted by [`localizer_by_name`].
-pub const LOCALIZER_NAMES: &[&str] = &["dead-reckoning", "ekf", "ekf-ml", "ekf-ml-targets"];
-
-/// Whether the named localiser corrects its pose by terrain-map matching (and so wants the
-/// navigator to look back over the terrain it crossed).
-pub fn matches_terrain(name: &str) -> bool {
-    matches!(name, "ekf-ml" | "ekf-ml-targets")
-}
-
-/// Builds a localiser by registry name, or `None` for an unknown name.
+/// A built-in localiser by name with its default parameters (`ekf-ml-targets` is `ekf-ml` with
+/// target selection), or `None` for another name. Missions choose localisers through the
+/// registry (`rovernav_navigation::registry`), which also takes `[localizer_params]`; a test
+/// there checks that both build the same localiser for every built-in name.
 pub fn localizer_by_name(name: &str, config: &RoverConfig, initial: Pose3) -> Option<Box<dyn Localizer>> {
+    let targets = EkfMlParams { select_targets: true, ..Default::default() };
     match name {
         "dead-reckoning" => Some(Box::new(DeadReckoning::new(config, initial))),
         "ekf" => Some(Box::new(Ekf::new(config, initial))),
         "ekf-ml" => Some(Box::new(EkfMl::new(config, initial))),
-        // Localisation target selection (paper 000 section 4.4) on: the look-back points where
-        // the map predicts the best fix.
-        "ekf-ml-targets" => Some(Box::new(EkfMl::with_params(
-            config,
-            initial,
-            EkfMlParams { select_targets: true, ..Default::default() },
-        ))),
+        "ekf-ml-targets" => Some(Box::new(EkfMl::with_params(config, initial, targets))),
         _ => None,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn registry_builds_every_listed_name_and_rejects_others() {
-        for name in LOCALIZER_NAMES {
-            let l = localizer_by_name(name, &RoverConfig::default(), Pose3::default());
-            assert_eq!(l.map(|l| l.name().to_string()).as_deref(), Some(*name));
-        }
-        assert!(localizer_by_name("nope", &RoverConfig::default(), Pose3::default()).is_none());
     }
 }

@@ -21,6 +21,7 @@
 //! around wide obstacles and rock clusters where GESTALT alone fails (Spirit, sol 108).
 
 use crate::params::{Field, Param, Unit, map_params};
+use crate::registry::{NavigatorEntry, Variant, param_info};
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
     DriveGuard, Goal, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay,
@@ -681,6 +682,23 @@ impl Navigator for GestaltNavigator {
         self.stats.clone()
     }
 }
+
+/// Registry entry: GESTALT alone or under Field D* (`gestalt`, `gestalt+field-dstar`).
+pub const ENTRY: NavigatorEntry = NavigatorEntry {
+    name: "gestalt",
+    doc: "GESTALT arc voting on a goodness map, alone or with a Field D* waypoint vote (paper 003 section 2)",
+    global_planners: &[
+        Variant { global_planner: "none", label: "gestalt" },
+        Variant { global_planner: "field-dstar", label: "gestalt+field-dstar" },
+    ],
+    params: || param_info(GestaltConfig::default(), GestaltConfig::params()),
+    build: |b| {
+        let field_dstar = b.global_planner == Some("field-dstar");
+        let config =
+            b.configured(GestaltConfig { field_dstar, ..Default::default() }, &GestaltConfig::params())?;
+        Ok(Box::new(GestaltNavigator::new(b.label, b.rover.clone(), config)))
+    },
+};
 
 #[cfg(test)]
 mod tests {

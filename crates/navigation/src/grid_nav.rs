@@ -17,6 +17,7 @@
 //! execution and the rover retraces its latest motions to room to turn.
 
 use crate::params::{Field, Param, Unit, map_params, turn_threshold_param};
+use crate::registry::{NavigatorEntry, Variant, param_info};
 use crate::terrain_model::{CostMode, TerrainModel, cells_in_disc};
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
@@ -570,6 +571,26 @@ impl Navigator for GridNavigator {
         self.stats.clone()
     }
 }
+
+/// Registry entry: the grid navigator under a choice of global planner (`astar-grid`,
+/// `mrpta`).
+pub const ENTRY: NavigatorEntry = NavigatorEntry {
+    name: "grid",
+    doc: "inflated hazard grid, global planner, segment driver (MER/MSL-style; paper 004 sections 3.4-3.5)",
+    global_planners: &[
+        Variant { global_planner: "astar", label: "astar-grid" },
+        Variant { global_planner: "dstar-lite", label: "mrpta" },
+    ],
+    params: || param_info(GridNavigatorConfig::default(), GridNavigatorConfig::params()),
+    build: |b| {
+        let planner = b.global_planner.unwrap_or("astar");
+        let config = b.configured(
+            GridNavigatorConfig { planner, ..Default::default() },
+            &GridNavigatorConfig::params(),
+        )?;
+        Ok(Box::new(GridNavigator::new(b.label, b.rover.clone(), config)))
+    },
+};
 
 #[cfg(test)]
 mod tests {

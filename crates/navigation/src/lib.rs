@@ -3,33 +3,42 @@
 //!
 //! Each navigator composes the perception, mapping, planning and localisation layers; it sees
 //! only the `NavInput` the executive gives it (pose estimate and sensor frames), never ground
-//! truth. A new navigator is one module plus one line in [`navigator_by_name`].
+//! truth. A new navigator is one module exporting an `ENTRY` plus one line in
+//! [`registry::BUILTIN_NAVIGATORS`] (or, outside this crate, `Registry::builtin().with(ENTRY)`
+//! installed with [`registry::install`]); the localisers are registered beside them
+//! ([`localizers`]). The functions here build from the installed [`registry()`].
 
 pub mod gestalt;
 pub mod grid_nav;
+pub mod localizers;
 pub mod look_back;
 pub mod nat;
 pub mod params;
+pub mod registry;
 pub mod roverbug;
 pub mod sr2;
 pub mod terrain_model;
 
 pub use grid_nav::{GridNavigator, GridNavigatorConfig};
 pub use params::{NavigatorError, NavigatorParams};
+pub use registry::{ParamInfo, Registry, registry};
 pub use terrain_model::TerrainModel;
 
-use params::{Param, configured};
-use rovernav_core::{Navigator, RoverConfig};
+use rovernav_core::{Localizer, Navigator, Pose3, RoverConfig};
 
-/// Registered navigator names.
-pub const NAVIGATOR_NAMES: [&str; 7] =
-    ["astar-grid", "mrpta", "gestalt", "gestalt+field-dstar", "sr2", "nat", "roverbug"];
+/// Every navigator combination's name (what a campaign's `all` runs), from the registry.
+pub fn navigator_names() -> Vec<&'static str> {
+    registry().navigator_names()
+}
+
+/// Every localiser name a mission may give, aliases included, from the registry.
+pub fn localizer_names() -> Vec<&'static str> {
+    registry().localizer_names()
+}
 
 /// A fresh navigator by registry name with its default parameters, or `None` if the name is
-/// unknown.
-///
-/// Any name followed by [`look_back::LOOK_BACK_SUFFIX`] ("+look-back") is that navigator
-/// wrapped in [`look_back::LookBack`].
+/// unknown. Any name followed by [`look_back::LOOK_BACK_SUFFIX`] ("+look-back") is that
+/// navigator wrapped in [`look_back::LookBack`].
 pub fn navigator_by_name(name: &str, rover: &RoverConfig) -> Option<Box<dyn Navigator>> {
     navigator_with_params(name, rover, &NavigatorParams::new()).ok()
 }
@@ -41,96 +50,38 @@ pub fn navigator_with_params(
     rover: &RoverConfig,
     params: &NavigatorParams,
 ) -> Result<Box<dyn Navigator>, NavigatorError> {
-    if let Some(base) = name.strip_suffix(look_back::LOOK_BACK_SUFFIX) {
-        let inner = navigator_with_params(base, rover, params)?;
-        return Ok(Box::new(look_back::LookBack::new(inner, Default::default())));
-    }
-    let grid = |planner: &'static str| {
-        let config = GridNavigatorConfig { planner, ..Default::default() };
-        configured(name, config, &GridNavigatorConfig::params(), params)
-    };
-    let gestalt = |field_dstar: bool| {
-        let config = gestalt::GestaltConfig { field_dstar, ..Default::default() };
-        configured(name, config, &gestalt::GestaltConfig::params(), params)
-    };
-    Ok(match name {
-        "astar-grid" => Box::new(GridNavigator::new("astar-grid", rover.clone(), grid("astar")?)),
-        "mrpta" => Box::new(GridNavigator::new("mrpta", rover.clone(), grid("dstar-lite")?)),
-        "gestalt" => Box::new(gestalt::GestaltNavigator::new("gestalt", rover.clone(), gestalt(false)?)),
-        "gestalt+field-dstar" => {
-            Box::new(gestalt::GestaltNavigator::new("gestalt+field-dstar", rover.clone(), gestalt(true)?))
-        }
-        "sr2" => {
-            let config = configured(name, sr2::Sr2Config::default(), &sr2::Sr2Config::params(), params)?;
-            Box::new(sr2::Sr2Navigator::new(rover.clone(), config))
-        }
-        "nat" => {
-            let config = configured(name, nat::NatConfig::default(), &nat::NatConfig::params(), params)?;
-            Box::new(nat::NatNavigator::new(rover.clone(), config))
-        }
-        "roverbug" => {
-            let table = roverbug::RoverBugConfig::params();
-            let config = configured(name, roverbug::RoverBugConfig::default(), &table, params)?;
-            Box::new(roverbug::RoverBug::new(rover.clone(), config))
-        }
-        _ => return Err(NavigatorError::UnknownNavigator { name: name.to_string() }),
-    })
+    registry().build_navigator(name, rover, params)
+}
+
+/// A localiser by registry name (an alias, or `name(k=v,...)`) with its default parameters,
+/// starting at `initial`; `None` if the name is unknown.
+pub fn localizer_by_name(name: &str, rover: &RoverConfig, initial: Pose3) -> Option<Box<dyn Localizer>> {
+    registry().build_localizer(name, rover, initial, &NavigatorParams::new()).ok()
 }
 
 /// Checks a navigator's parameters (names and ranges) for a mission or campaign file. An
 /// unknown navigator passes: callers report unknown names with their own list of names.
 pub fn check_params(name: &str, params: &NavigatorParams) -> Result<(), NavigatorError> {
-    match navigator_with_params(name, &RoverConfig::default(), params) {
-        Ok(_) | Err(NavigatorError::UnknownNavigator { .. }) => Ok(()),
+    match registry().check_navigator(name, params) {
+        Ok(()) | Err(NavigatorError::UnknownNavigator { .. }) => Ok(()),
         Err(e) => Err(e),
     }
 }
 
-/// One parameter a navigator takes in the mission file's `[navigator_params]` table.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ParamInfo {
-    /// Name in the mission file.
-    pub name: &'static str,
-    /// Unit and valid range.
-    pub unit: &'static str,
-    /// One-line meaning.
-    pub doc: &'static str,
-    /// The value the navigator uses when the mission does not set it (in the parameter's unit).
-    pub default: f64,
-}
-
 /// The parameters a registered navigator takes, or `None` if the name is unknown.
 pub fn navigator_params(name: &str) -> Option<Vec<ParamInfo>> {
-    fn info<C>(mut defaults: C, table: Vec<Param<C>>) -> Vec<ParamInfo> {
-        table
-            .iter()
-            .map(|p| {
-                let default = params::value(&mut defaults, p);
-                ParamInfo { name: p.name, unit: p.unit.label(), doc: p.doc, default }
-            })
-            .collect()
-    }
-    let base = name.strip_suffix(look_back::LOOK_BACK_SUFFIX).unwrap_or(name);
-    Some(match base {
-        "astar-grid" | "mrpta" => info(GridNavigatorConfig::default(), GridNavigatorConfig::params()),
-        "gestalt" | "gestalt+field-dstar" => {
-            info(gestalt::GestaltConfig::default(), gestalt::GestaltConfig::params())
-        }
-        "sr2" => info(sr2::Sr2Config::default(), sr2::Sr2Config::params()),
-        "nat" => info(nat::NatConfig::default(), nat::NatConfig::params()),
-        "roverbug" => info(roverbug::RoverBugConfig::default(), roverbug::RoverBugConfig::params()),
-        _ => return None,
-    })
+    registry().navigator(name, None).ok().map(|choice| (choice.entry.params)())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::{Param, configured};
 
     #[test]
     fn every_navigator_lists_distinct_parameters_that_take_their_defaults_back() {
         let rover = RoverConfig::default();
-        for name in NAVIGATOR_NAMES {
+        for name in navigator_names() {
             let params = navigator_params(name).expect("registered navigators list parameters");
             assert!(!params.is_empty(), "{name}");
             for (i, p) in params.iter().enumerate() {
@@ -195,13 +146,20 @@ mod tests {
             roverbug::RoverBugConfig::default(),
             roverbug::RoverBugConfig::params(),
         );
+        each_parameter_sets_its_own_field(
+            rovernav_localization::EkfMlParams::default(),
+            localizers::ekf_ml_params(),
+        );
     }
 
     #[test]
     fn unknown_names_and_values_are_errors_naming_them() {
         let rover = RoverConfig::default();
         let err = navigator_with_params("warp-drive", &rover, &NavigatorParams::new()).err().unwrap();
-        assert_eq!(err, NavigatorError::UnknownNavigator { name: "warp-drive".into() });
+        assert!(
+            matches!(&err, NavigatorError::UnknownNavigator { name, .. } if name == "warp-drive"),
+            "{err}"
+        );
         let bogus: NavigatorParams = [("wedge_count".to_string(), 3.0)].into();
         let err = navigator_with_params("roverbug+look-back", &rover, &bogus).err().unwrap();
         assert!(err.to_string().contains("no parameter `wedge_count`"), "{err}");

@@ -16,6 +16,7 @@
 
 use crate::gestalt::{arc_pose, keep_out_distance};
 use crate::params::{Field, Param, Unit, map_params, turn_threshold_param};
+use crate::registry::{NavigatorEntry, param_info};
 use crate::terrain_model::TerrainModel;
 use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
@@ -373,6 +374,20 @@ impl NatNavigator {
         NavCommand::Turn { angle: -spin }
     }
 }
+
+/// Registry entry: navigation templates.
+pub const ENTRY: NavigatorEntry = NavigatorEntry {
+    name: "nat",
+    doc: "NaT navigation templates: spun potential fields around sensed obstacles (paper 001 section 4)",
+    global_planners: &[],
+    params: || param_info(NatConfig::default(), NatConfig::params()),
+    build: |b| {
+        Ok(Box::new(NatNavigator::new(
+            b.rover.clone(),
+            b.configured(NatConfig::default(), &NatConfig::params())?,
+        )))
+    },
+};
 
 #[cfg(test)]
 mod tests {

@@ -1,12 +1,12 @@
-//! Navigator parameters from the mission file's `[navigator_params]` table (as Nav2 gives each
-//! plugin its parameters): every navigator publishes a table of the settings a mission may
+//! Navigator and localiser parameters from the mission file's `[navigator_params]` and
+//! `[localizer_params]` tables (as Nav2 gives each plugin its parameters): every navigator publishes a table of the settings a mission may
 //! change, with units and valid ranges, and a misspelt name or an out-of-range value is an
 //! error naming the navigator and the parameter rather than a silently ignored setting.
 
 use std::collections::BTreeMap;
 use std::fmt;
 
-/// Numeric parameters by mission-file name.
+/// Numeric parameters by mission-file name (of a navigator or a localiser).
 pub type NavigatorParams = BTreeMap<String, f64>;
 
 /// What a parameter's value means, which fixes its valid range and its conversion.
@@ -72,17 +72,46 @@ pub struct Param<C> {
     pub field: fn(&mut C) -> Field<'_>,
 }
 
-/// Why a navigator could not be built from a name and parameters.
+/// Why a navigator or a localiser could not be built from a name and parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum NavigatorError {
     /// No navigator of that name is registered.
     UnknownNavigator {
         /// The name asked for.
         name: String,
+        /// The names a mission may give.
+        known: Vec<&'static str>,
     },
-    /// The navigator has no parameter of that name.
-    UnknownParam {
+    /// No localiser of that name is registered.
+    UnknownLocalizer {
+        /// The name asked for.
+        name: String,
+        /// The names a mission may give.
+        known: Vec<&'static str>,
+    },
+    /// The navigator cannot run under that global planner.
+    UnknownGlobalPlanner {
         /// Navigator registry name.
+        navigator: String,
+        /// The planner asked for.
+        planner: String,
+        /// The planners it can run under.
+        known: Vec<&'static str>,
+    },
+    /// A name that fixes the global planner was given another one.
+    ConflictingGlobalPlanner {
+        /// The name given.
+        navigator: String,
+        /// The planner asked for.
+        planner: String,
+        /// The planner the name stands for.
+        implied: &'static str,
+    },
+    /// The navigator (or localiser) has no parameter of that name.
+    UnknownParam {
+        /// What it is: "navigator" or "localizer".
+        kind: &'static str,
+        /// Registry name.
         navigator: String,
         /// The parameter asked for.
         param: String,
@@ -91,7 +120,9 @@ pub enum NavigatorError {
     },
     /// The value is outside the parameter's range.
     InvalidParam {
-        /// Navigator registry name.
+        /// What it is: "navigator" or "localizer".
+        kind: &'static str,
+        /// Registry name.
         navigator: String,
         /// The parameter.
         param: String,
@@ -105,15 +136,32 @@ pub enum NavigatorError {
 impl fmt::Display for NavigatorError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            NavigatorError::UnknownNavigator { name } => write!(f, "unknown navigator `{name}`"),
-            NavigatorError::UnknownParam { navigator, param, known } if known.is_empty() => {
-                write!(f, "navigator `{navigator}` takes no parameters (given `{param}`)")
+            NavigatorError::UnknownNavigator { name, known } => {
+                write!(f, "unknown navigator `{name}` (known: {})", known.join(", "))
             }
-            NavigatorError::UnknownParam { navigator, param, known } => {
-                write!(f, "navigator `{navigator}` has no parameter `{param}` (it has: {})", known.join(", "))
+            NavigatorError::UnknownLocalizer { name, known } => {
+                write!(f, "unknown localizer `{name}` (known: {})", known.join(", "))
             }
-            NavigatorError::InvalidParam { navigator, param, value, expected } => {
-                write!(f, "parameter `{param}` of navigator `{navigator}` is {value}, expected {expected}")
+            NavigatorError::UnknownGlobalPlanner { navigator, planner, known } if known.is_empty() => {
+                write!(f, "navigator `{navigator}` takes no global planner (given `{planner}`)")
+            }
+            NavigatorError::UnknownGlobalPlanner { navigator, planner, known } => write!(
+                f,
+                "navigator `{navigator}` has no global planner `{planner}` (it has: {})",
+                known.join(", ")
+            ),
+            NavigatorError::ConflictingGlobalPlanner { navigator, planner, implied } => write!(
+                f,
+                "navigator `{navigator}` runs under global planner `{implied}`, not `{planner}` (name the entry to choose)"
+            ),
+            NavigatorError::UnknownParam { kind, navigator, param, known } if known.is_empty() => {
+                write!(f, "{kind} `{navigator}` takes no parameters (given `{param}`)")
+            }
+            NavigatorError::UnknownParam { kind, navigator, param, known } => {
+                write!(f, "{kind} `{navigator}` has no parameter `{param}` (it has: {})", known.join(", "))
+            }
+            NavigatorError::InvalidParam { kind, navigator, param, value, expected } => {
+                write!(f, "parameter `{param}` of {kind} `{navigator}` is {value}, expected {expected}")
             }
         }
     }
@@ -128,7 +176,28 @@ impl NavigatorError {
             NavigatorError::UnknownParam { param, .. } | NavigatorError::InvalidParam { param, .. } => {
                 Some(param)
             }
-            NavigatorError::UnknownNavigator { .. } => None,
+            _ => None,
+        }
+    }
+
+    /// Whether the error is about the global planner.
+    pub fn is_about_global_planner(&self) -> bool {
+        matches!(
+            self,
+            NavigatorError::UnknownGlobalPlanner { .. } | NavigatorError::ConflictingGlobalPlanner { .. }
+        )
+    }
+
+    /// The same error said of a localiser.
+    pub fn of_localizer(self) -> Self {
+        match self {
+            NavigatorError::UnknownParam { navigator, param, known, .. } => {
+                NavigatorError::UnknownParam { kind: "localizer", navigator, param, known }
+            }
+            NavigatorError::InvalidParam { navigator, param, value, expected, .. } => {
+                NavigatorError::InvalidParam { kind: "localizer", navigator, param, value, expected }
+            }
+            other => other,
         }
     }
 }
@@ -145,12 +214,14 @@ pub fn apply<C: Clone>(
     for (name, &value) in params {
         let Some(param) = table.iter().find(|p| p.name == name) else {
             return Err(NavigatorError::UnknownParam {
+                kind: "navigator",
                 navigator: navigator.to_string(),
                 param: name.clone(),
                 known: table.iter().map(|p| p.name).collect(),
             });
         };
         let invalid = || NavigatorError::InvalidParam {
+            kind: "navigator",
             navigator: navigator.to_string(),
             param: name.clone(),
             value,

@@ -18,6 +18,7 @@
 
 use crate::gestalt::keep_out_distance;
 use crate::params::{Field, Param, Unit};
+use crate::registry::{NavigatorEntry, param_info};
 use rovernav_core::{
     DriveGuard, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Point2, ProximityReading,
     RoverConfig, angle_diff,
@@ -425,3 +426,17 @@ impl Navigator for Sr2Navigator {
         self.stats.clone()
     }
 }
+
+/// Registry entry: SR2's reactive navigation.
+pub const ENTRY: NavigatorEntry = NavigatorEntry {
+    name: "sr2",
+    doc: "SR2 reactive navigation on proximity sensors, no maps (paper 001 sections 5.1-5.2)",
+    global_planners: &[],
+    params: || param_info(Sr2Config::default(), Sr2Config::params()),
+    build: |b| {
+        Ok(Box::new(Sr2Navigator::new(
+            b.rover.clone(),
+            b.configured(Sr2Config::default(), &Sr2Config::params())?,
+        )))
+    },
+};

@@ -118,9 +118,11 @@ fn run_campaign(args: RunArgs) -> anyhow::Result<()> {
         None => (CampaignSpec::builtin(), "built-in campaign".to_string()),
     };
     if let Some(navs) = &args.navigators {
-        let known = rovernav_navigation::NAVIGATOR_NAMES;
-        if let Some(bad) = navs.iter().find(|n| *n != "all" && !known.contains(&n.as_str())) {
-            bail!("--navigators: unknown navigator `{bad}` (known: all, {})", known.join(", "));
+        let registry = rovernav_navigation::registry();
+        for name in navs.iter().filter(|n| *n != "all") {
+            if let Err(e) = registry.navigator(name, None) {
+                bail!("--navigators: {}", e.to_string().replace("(known: ", "(known: all, "));
+            }
         }
         spec.navigators = navs.clone();
         // Parameters of navigators the override leaves out have no runs to go to.

@@ -41,7 +41,7 @@ enum Command {
     /// Evaluations against simulator truth.
     #[command(subcommand)]
     Eval(EvalCommand),
-    /// The registered navigators and the parameters each takes in a mission's `[navigator_params]`.
+    /// The registry: navigators (global planners, `[navigator_params]`) and localisers (`[localizer_params]`).
     Navigators(NavigatorsArgs),
     /// Campaigns: every navigator on the same generated terrains, with a results table and plots.
     Campaign(campaign::CampaignArgs),
@@ -77,7 +77,7 @@ enum EvalCommand {
 /// Options of `rovernav navigators`.
 #[derive(clap::Args, Debug)]
 struct NavigatorsArgs {
-    /// Only this navigator (registry name).
+    /// Only this navigator or localiser (registry name or alias).
     name: Option<String>,
 }
 
@@ -92,9 +92,16 @@ struct RunArgs {
     /// Override the mission's navigator (registry name).
     #[arg(long)]
     navigator: Option<String>,
-    /// Override the mission's localiser (registry name: dead-reckoning, ekf, ekf-ml).
+    /// Override the navigator's global planner (`rovernav navigators` lists each one's).
+    #[arg(long)]
+    global_planner: Option<String>,
+    /// Override the mission's localiser (registry name: dead-reckoning, ekf, ekf-ml, ...).
     #[arg(long)]
     localizer: Option<String>,
+    /// Set a localiser parameter, NAME=VALUE (repeatable; over the mission's
+    /// `[localizer_params]`).
+    #[arg(long = "localizer-param", value_name = "NAME=VALUE")]
+    localizer_params: Vec<String>,
     /// Set a navigator parameter, NAME=VALUE (repeatable; over the mission's
     /// `[navigator_params]`; `rovernav navigators` lists them).
     #[arg(long = "param", value_name = "NAME=VALUE")]
@@ -135,23 +142,43 @@ impl MissionToRun {
                 mission.navigator_params.clear();
             }
             mission.navigator = nav.clone();
+            mission.global_planner = None;
             origin_of_navigator = "--navigator".into();
+        }
+        if let Some(planner) = &args.global_planner {
+            mission.global_planner = Some(planner.clone());
+        }
+        let registry = rovernav_navigation::registry();
+        if let Err(e) = registry.navigator(&mission.navigator, mission.global_planner.as_deref())
+            && e.is_about_global_planner()
+        {
+            anyhow::bail!("--global-planner: {e}");
         }
         for param in &args.params {
             let (name, value) = parse_param(param)?;
             mission.navigator_params.insert(name, value);
         }
-        if let Err(e) = rovernav_navigation::check_params(&mission.navigator, &mission.navigator_params) {
+        if let Err(e) =
+            rovernav_navigation::check_params(&mission.navigator_spec(), &mission.navigator_params)
+        {
             anyhow::bail!("--param: {e}");
         }
         if let Some(name) = &args.localizer {
-            if !rovernav_localization::LOCALIZER_NAMES.contains(&name.as_str()) {
-                anyhow::bail!(
-                    "--localizer: unknown localizer `{name}` (known: {})",
-                    rovernav_localization::LOCALIZER_NAMES.join(", ")
-                );
+            if *name != mission.localizer {
+                // The mission's parameters belong to the localiser it names.
+                mission.localizer_params.clear();
+            }
+            if let Err(e) = registry.localizer(name, &Default::default()) {
+                anyhow::bail!("--localizer: {e}");
             }
             mission.localizer = name.clone();
+        }
+        for param in &args.localizer_params {
+            let (name, value) = parse_param(param)?;
+            mission.localizer_params.insert(name, value);
+        }
+        if let Err(e) = registry.check_localizer(&mission.localizer, &mission.localizer_params) {
+            anyhow::bail!("--localizer-param: {e}");
         }
         let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&mission.name));
         Ok(Self { mission, origin_of_navigator, out_dir })
@@ -198,21 +225,42 @@ fn main() -> ExitCode {
 }
 
 fn navigators(args: NavigatorsArgs) -> anyhow::Result<()> {
-    let names: Vec<&str> = match &args.name {
-        Some(name) => vec![name.as_str()],
-        None => rovernav_navigation::NAVIGATOR_NAMES.to_vec(),
-    };
-    for name in names {
-        let Some(params) = rovernav_navigation::navigator_params(name) else {
-            anyhow::bail!(
-                "unknown navigator `{name}` (known: {})",
-                rovernav_navigation::NAVIGATOR_NAMES.join(", ")
-            );
-        };
-        println!("{name}");
+    let registry = rovernav_navigation::registry();
+    let print_params = |params: Vec<rovernav_navigation::ParamInfo>| {
         for p in params {
             println!("  {} = {} ({}): {}", p.name, p.default, p.unit, p.doc);
         }
+    };
+    let navigator = args.name.as_deref().map(|name| registry.navigator(name, None));
+    let localizer = args.name.as_deref().map(|name| registry.localizer(name, &Default::default()));
+    if let (Some(Err(e)), Some(Err(_))) = (&navigator, &localizer) {
+        anyhow::bail!("{e}; localizers: {}", registry.localizer_names().join(", "));
+    }
+    for entry in registry.navigators() {
+        if navigator.as_ref().is_some_and(|c| c.as_ref().map_or(true, |c| c.entry.name != entry.name)) {
+            continue;
+        }
+        println!("{}: {}", entry.name, entry.doc);
+        if !entry.global_planners.is_empty() {
+            let variants: Vec<String> = entry
+                .global_planners
+                .iter()
+                .map(|v| format!("{} (`{}`)", v.global_planner, v.label))
+                .collect();
+            println!("  global_planner: {}", variants.join(", "));
+        }
+        print_params((entry.params)());
+    }
+    for entry in registry.localizers() {
+        if localizer.as_ref().is_some_and(|c| c.as_ref().map_or(true, |c| c.entry.name != entry.name)) {
+            continue;
+        }
+        println!("localizer {}: {}", entry.name, entry.doc);
+        for alias in registry.localizer_aliases().iter().filter(|a| a.localizer == entry.name) {
+            let set: Vec<String> = alias.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            println!("  alias `{}`: {}", alias.name, set.join(", "));
+        }
+        print_params((entry.params)());
     }
     Ok(())
 }

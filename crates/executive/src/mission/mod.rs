@@ -31,9 +31,14 @@ pub struct Mission {
     /// Seed for terrain generation and every sensor's noise.
     #[serde(default = "default_seed")]
     pub seed: u64,
-    /// Registry name of the navigator.
+    /// Registry name of the navigator (`rovernav navigators` lists them; old combined names
+    /// such as `gestalt+field-dstar` are aliases).
     #[serde(default = "default_navigator")]
     pub navigator: String,
+    /// The global planner the navigator runs under, among those `rovernav navigators` lists
+    /// for it (default: its first).
+    #[serde(default)]
+    pub global_planner: Option<String>,
     /// Parameters of the navigator (`[navigator_params]`, names and units as `rovernav
     /// navigators` lists them); unset ones keep the navigator's defaults.
     #[serde(default)]
@@ -41,6 +46,9 @@ pub struct Mission {
     /// Registry name of the localiser.
     #[serde(default = "default_localizer")]
     pub localizer: String,
+    /// Parameters of the localiser (`[localizer_params]`, as `rovernav navigators` lists them).
+    #[serde(default)]
+    pub localizer_params: rovernav_navigation::NavigatorParams,
     /// Mission time budget (s); exceeding it ends the run with `timeout`.
     #[serde(default = "default_time_limit")]
     pub time_limit_s: f64,
@@ -172,6 +180,37 @@ impl Mission {
             .expect("the built-in mission is valid")
     }
 
+    /// The navigator as one registry name (an alias's label, e.g. `gestalt+field-dstar` for
+    /// `gestalt` under `field-dstar`); the name as given when it is not registered.
+    pub fn navigator_spec(&self) -> String {
+        let registry = rovernav_navigation::registry();
+        match registry.navigator(&self.navigator, self.global_planner.as_deref()) {
+            Ok(choice) => choice.spec(),
+            Err(_) => self.navigator.clone(),
+        }
+    }
+
+    /// The localiser as one registry name (an alias, or `name(k=v,...)` with its parameters);
+    /// the name as given when it is not registered.
+    pub fn localizer_spec(&self) -> String {
+        let registry = rovernav_navigation::registry();
+        match registry.localizer(&self.localizer, &self.localizer_params) {
+            Ok(choice) => registry.localizer_spec(&choice),
+            Err(_) => self.localizer.clone(),
+        }
+    }
+
+    /// Checks the navigator's global planner and parameters (an unknown name passes).
+    fn check_navigator(&self) -> Result<(), rovernav_navigation::NavigatorError> {
+        use rovernav_navigation::NavigatorError;
+        let registry = rovernav_navigation::registry();
+        match registry.navigator(&self.navigator, self.global_planner.as_deref()) {
+            Ok(choice) => rovernav_navigation::check_params(&choice.spec(), &self.navigator_params),
+            Err(NavigatorError::UnknownNavigator { .. }) => Ok(()),
+            Err(e) => Err(e),
+        }
+    }
+
     fn validate(&self, origin: &str) -> Result<(), MissionError> {
         let bad = |field: &str, message: &str| {
             Err(MissionError::Invalid { path: origin.into(), field: field.into(), message: message.into() })
@@ -209,9 +248,21 @@ impl Mission {
         if !positive(self.goal.tolerance_m) {
             return bad("goal.tolerance_m", "must be positive");
         }
-        // An unknown navigator name is the run's error (it lists the registered ones).
-        if let Err(e) = rovernav_navigation::check_params(&self.navigator, &self.navigator_params) {
-            let field = e.param().map_or("navigator_params".into(), |p| format!("navigator_params.{p}"));
+        // An unknown navigator or localiser name is the run's error (it lists the registered
+        // ones).
+        if let Err(e) = self.check_navigator() {
+            let field = match e.param() {
+                _ if e.is_about_global_planner() => "global_planner".into(),
+                Some(p) => format!("navigator_params.{p}"),
+                None => "navigator_params".into(),
+            };
+            return bad(&field, &e.to_string());
+        }
+        let registry = rovernav_navigation::registry();
+        if let Err(e) = registry.check_localizer(&self.localizer, &self.localizer_params)
+            && !matches!(e, rovernav_navigation::NavigatorError::UnknownLocalizer { .. })
+        {
+            let field = e.param().map_or("localizer_params".into(), |p| format!("localizer_params.{p}"));
             return bad(&field, &e.to_string());
         }
         for (i, zone) in self.goal.keep_out.iter().enumerate() {

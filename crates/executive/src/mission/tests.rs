@@ -134,3 +134,48 @@ fn start_needs_one_coordinate_frame() {
     let err = Mission::from_toml(&text, "m.toml").unwrap_err().to_string();
     assert!(err.contains("`start`"), "{err}");
 }
+
+#[test]
+fn combinations_are_chosen_by_options_and_old_names_stay_aliases() {
+    let with = |lines: &str| {
+        let text = DEFAULT_MISSION_TOML.replace("navigator = \"astar-grid\"\n", "");
+        Mission::from_toml(&format!("{lines}\n{text}"), "m.toml")
+    };
+    for (lines, spec) in [
+        ("navigator = \"gestalt\"\nglobal_planner = \"field-dstar\"", "gestalt+field-dstar"),
+        ("navigator = \"gestalt+field-dstar\"", "gestalt+field-dstar"),
+        ("navigator = \"grid\"\nglobal_planner = \"dstar-lite\"", "mrpta"),
+        ("navigator = \"grid\"", "astar-grid"),
+        ("navigator = \"mrpta+look-back\"", "mrpta+look-back"),
+    ] {
+        assert_eq!(with(lines).unwrap().navigator_spec(), spec, "{lines}");
+    }
+    for (lines, field) in [
+        ("navigator = \"gestalt\"\nglobal_planner = \"astar\"", "`global_planner`"),
+        ("navigator = \"mrpta\"\nglobal_planner = \"astar\"", "`global_planner`"),
+        ("navigator = \"sr2\"\nglobal_planner = \"astar\"", "`global_planner`"),
+    ] {
+        let err = with(lines).unwrap_err().to_string();
+        assert!(err.contains(field) && err.contains("line 2"), "{lines}: {err}");
+    }
+    let m = Mission::from_toml(
+        &format!("{DEFAULT_MISSION_TOML}\n[localizer_params]\nselect_targets = 1\n")
+            .replace("\"dead-reckoning\"", "\"ekf-ml\""),
+        "m.toml",
+    )
+    .unwrap();
+    assert_eq!(m.localizer_spec(), "ekf-ml-targets");
+    let text = DEFAULT_MISSION_TOML.replace("\"dead-reckoning\"", "\"ekf-ml-targets\"");
+    assert_eq!(Mission::from_toml(&text, "m.toml").unwrap().localizer_spec(), "ekf-ml-targets");
+    for (bad, field) in
+        [("min_travel_m = -1.0", "localizer_params.min_travel_m"), ("warp = 1", "localizer_params.warp")]
+    {
+        let full = format!("{DEFAULT_MISSION_TOML}\n[localizer_params]\n{bad}\n")
+            .replace("\"dead-reckoning\"", "\"ekf-ml\"");
+        let err = Mission::from_toml(&full, "m.toml").unwrap_err().to_string();
+        assert!(
+            err.contains(field) && err.contains(&format!("line {}", full.lines().count())),
+            "{bad}: {err}"
+        );
+    }
+}

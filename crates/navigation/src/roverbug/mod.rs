@@ -38,6 +38,7 @@ pub use config::{
     Budgets, PaperParams, RecoveryParams, RoverBugConfig, SafetyParams, c_obstacle_terrain, safety_terrain,
 };
 
+use crate::registry::{NavigatorEntry, param_info};
 use ltg::{Ltg, Node};
 use recovery::Recovered;
 use rovernav_core::{
@@ -286,3 +287,17 @@ impl Navigator for RoverBug {
         self.stats.clone()
     }
 }
+
+/// Registry entry: RoverBug.
+pub const ENTRY: NavigatorEntry = NavigatorEntry {
+    name: "roverbug",
+    doc: "RoverBug: local tangent graph on sensed wedges, no global map (paper 000 section 2)",
+    global_planners: &[],
+    params: || param_info(RoverBugConfig::default(), RoverBugConfig::params()),
+    build: |b| {
+        Ok(Box::new(RoverBug::new(
+            b.rover.clone(),
+            b.configured(RoverBugConfig::default(), &RoverBugConfig::params())?,
+        )))
+    },
+};
