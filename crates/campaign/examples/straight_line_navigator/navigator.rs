@@ -1,7 +1,7 @@
 //! The straight-line navigator: an example of adding a navigator from outside the navigation
 //! crate. It turns toward the next waypoint (then the goal) and drives straight at it in
-//! guarded steps, never sensing: the baseline a navigator that looks must beat. A proximity
-//! trigger or too much tilt ends the traverse with a request for help.
+//! steps, never sensing and never swerving: the baseline a navigator that looks must beat (its
+//! hazard contacts are what sensing buys). Only too much tilt stops a step early.
 //!
 //! Registering it is one line: `Registry::builtin().with(ENTRY)` installed with
 //! `rovernav_navigation::registry::install` before the first run.
@@ -90,9 +90,6 @@ impl Navigator for StraightLine {
     }
 
     fn step(&mut self, input: &NavInput<'_>) -> NavCommand {
-        if input.frame.proximity.any() {
-            return NavCommand::Finish(Outcome::HelpRequested, "proximity sensor triggered".into());
-        }
         let pose = input.estimate.pose;
         let here = Point2::new(pose.x, pose.y);
         let goal = input.goal;
@@ -116,7 +113,7 @@ impl Navigator for StraightLine {
             return NavCommand::Turn { angle: error };
         }
         self.steps += 1;
-        let guard = DriveGuard { proximity: true, max_tilt: Some(20f64.to_radians()) };
+        let guard = DriveGuard { proximity: false, max_tilt: Some(20f64.to_radians()) };
         NavCommand::Drive { distance: distance.min(self.config.step), curvature: 0.0, guard }
     }
 
