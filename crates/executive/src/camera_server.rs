@@ -116,7 +116,7 @@ mod tests {
     }
 
     fn image(camera: &str, pixels: Vec<u16>) -> ImageMsg {
-        ImageMsg { camera: camera.into(), t: 0.0, width: 2, height: 2, bits: 12, pixels }
+        ImageMsg { camera: camera.into(), t: 0.0, width: 2, height: 2, bits: 12, pixels, pan: 0.0, tilt: 0.0 }
     }
 
     /// Feeds frames one step each; the images served and the fault, if any.
