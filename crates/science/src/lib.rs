@@ -24,6 +24,8 @@ pub mod triage;
 
 pub use cloud::{CloudDetection, CloudParams, CloudRegion, detect_clouds};
 pub use dust_devil::{DustDevilBox, DustDevilParams, FrameDetections, detect_dust_devils};
+/// The detectors' image type (grey, float, on the image's own scale).
+pub use rovernav_vision::image::GreyF32;
 pub use sky::{SkyMask, SkyParams, segment_sky};
 pub use triage::{Event, EventKind, ImageRecord, Product, TriagePlan, triage};
 

@@ -17,10 +17,12 @@
 
 mod commands;
 mod plan;
+mod science_watch;
 mod tasks;
 #[cfg(test)]
 mod tests;
 
+pub use science_watch::{Watch, WatchKind, WatchSpec, WatchSummary};
 pub use tasks::{Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
 
 use crate::components::{JausState, Port};
@@ -85,6 +87,8 @@ pub struct Deliberative {
     statuses: Subscriber<TaskStatusMsg>,
     components_sub: Subscriber<ComponentStatusMsg>,
     operator: Subscriber<String>,
+    /// Science watches in progress, by task id.
+    watches: BTreeMap<u64, science_watch::WatchRun>,
 }
 
 impl Deliberative {
@@ -130,6 +134,7 @@ impl Deliberative {
             statuses: bus.subscribe(topics::TASK_STATUS)?,
             components_sub: bus.subscribe(topics::SYSTEM_STATUS)?,
             operator: bus.subscribe(topics::OPERATOR_COMMAND)?,
+            watches: BTreeMap::new(),
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -231,6 +236,7 @@ impl Deliberative {
             return self.finish(bus, Outcome::Aborted, why);
         }
         if self.state == MissionState::Running {
+            self.pump_watches(bus)?;
             self.advance(bus)?;
         }
         Ok(())
@@ -242,6 +248,7 @@ impl Deliberative {
             self.estimate = Some(*e);
         }
         for f in &frames {
+            self.watch_frame(f);
             self.time_s = f.t;
             if f.request().is_some() {
                 self.cycles += 1;
@@ -260,6 +267,9 @@ impl Deliberative {
         }
         for s in bus.take(&self.statuses)? {
             let Some(i) = self.tasks.iter().position(|t| t.command == Some(s.task)) else { continue };
+            if self.watch_status(i, &s) {
+                continue;
+            }
             let task = &mut self.tasks[i];
             if task.state.is_final() {
                 continue;

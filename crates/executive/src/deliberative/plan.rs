@@ -40,6 +40,7 @@ impl Deliberative {
                     DriveToMsg { task: cmd, goal: GoalMsg::from(&goal) },
                 )?;
             }
+            TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => return self.start_watch(bus, i, cmd),
             TaskKind::Panorama => {
                 let requests = (0..PANORAMA_PANS)
                     .map(|k| SenseMsg::Mast {

@@ -13,6 +13,11 @@ pub enum TaskKind {
         /// Arrival tolerance (m).
         tolerance: f64,
     },
+    /// Stop and watch the sky for clouds: Navcam images, the cloud detector, the triage.
+    CloudWatch(crate::deliberative::WatchSpec),
+    /// Stop and watch the horizon for dust devils: a Navcam sequence, the dust-devil detector,
+    /// the triage.
+    DustDevilWatch(crate::deliberative::WatchSpec),
     /// Image all around with the mast.
     Panorama,
     /// Image a target with the mast.
@@ -48,6 +53,8 @@ impl TaskKind {
     pub fn name(&self) -> &'static str {
         match self {
             TaskKind::DriveTo { .. } => "drive_to",
+            TaskKind::CloudWatch(_) => "cloud_watch",
+            TaskKind::DustDevilWatch(_) => "dust_devil_watch",
             TaskKind::Panorama => "panorama",
             TaskKind::ScienceImage { .. } => "science_image",
             TaskKind::PlaceInstrument { .. } => "place_instrument",
@@ -58,6 +65,7 @@ impl TaskKind {
     /// The task's target, if it has one.
     pub fn target(&self) -> Option<Point2> {
         match *self {
+            TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => None,
             TaskKind::DriveTo { target, .. }
             | TaskKind::ScienceImage { target }
             | TaskKind::PlaceInstrument { target }
@@ -70,6 +78,8 @@ impl TaskKind {
     pub fn resources(&self) -> &'static [Resource] {
         match self {
             TaskKind::DriveTo { .. } => &[Resource::Wheels, Resource::Mast],
+            // The rover stands still while it watches.
+            TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => &[Resource::Wheels, Resource::Mast],
             TaskKind::Panorama | TaskKind::ScienceImage { .. } => &[Resource::Mast],
             TaskKind::PlaceInstrument { .. } | TaskKind::Scoop { .. } => &[Resource::Arm, Resource::Wheels],
         }

@@ -17,6 +17,10 @@ pub enum TaskKindName {
     PlaceInstrument,
     /// Scoop a sample at the target `x`, `y` (in the arm's reach).
     Scoop,
+    /// Stop and watch the sky for clouds (`frames`, `interval_s`, `pan_deg`, `tilt_deg`, `budget`).
+    CloudWatch,
+    /// Stop and watch the horizon for dust devils (the same fields).
+    DustDevilWatch,
 }
 
 /// One `[[tasks]]` entry.
@@ -31,6 +35,16 @@ pub struct TaskSpecToml {
     pub y: Option<f64>,
     /// Arrival tolerance of a `drive_to` (m; default: the goal's).
     pub tolerance_m: Option<f64>,
+    /// Images of a watch (default: 4 for clouds, 10 for dust devils).
+    pub frames: Option<u32>,
+    /// Seconds asked between a watch's images.
+    pub interval_s: Option<f64>,
+    /// Mast pan of a watch (deg, counter-clockwise from forward; default 0).
+    pub pan_deg: Option<f64>,
+    /// Mast tilt of a watch (deg, up; default 20 for clouds, -2 for dust devils).
+    pub tilt_deg: Option<f64>,
+    /// Downlink budget of a watch (fraction of its raw volume; default 0.1).
+    pub budget: Option<f64>,
     /// Start together with the previous task (they must need different resources).
     #[serde(default)]
     pub parallel: bool,
@@ -43,10 +57,14 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
     for (i, t) in mission.tasks.iter().enumerate() {
         let field = |name: &str| format!("tasks[{i}].{name}");
         let has_target = t.x.is_some() || t.y.is_some();
-        if t.kind == TaskKindName::Panorama && has_target {
-            return Err((field("x"), "a panorama takes no target".into()));
+        let untargeted = matches!(
+            t.kind,
+            TaskKindName::Panorama | TaskKindName::CloudWatch | TaskKindName::DustDevilWatch
+        );
+        if untargeted && has_target {
+            return Err((field("x"), "a panorama or a watch takes no target".into()));
         }
-        if t.kind != TaskKindName::Panorama && !(t.x.is_some() && t.y.is_some()) {
+        if !(untargeted || t.x.is_some() && t.y.is_some()) {
             return Err((
                 field(if t.x.is_none() { "x" } else { "y" }),
                 "this task needs a target x and y".into(),
@@ -54,6 +72,18 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
         }
         if [t.x, t.y].iter().flatten().any(|v| !v.is_finite()) {
             return Err((field("x"), "target coordinates must be finite numbers".into()));
+        }
+        if let Some(kind) = t.watch_kind() {
+            if let Err((name, why)) = t.watch_spec(kind).check(kind) {
+                return Err((field(name), why));
+            }
+        } else if t.frames.is_some()
+            || [t.interval_s, t.pan_deg, t.tilt_deg, t.budget].iter().any(Option::is_some)
+        {
+            return Err((
+                field("frames"),
+                "frames, interval_s, pan_deg, tilt_deg and budget are a watch's".into(),
+            ));
         }
         if let Some(tol) = t.tolerance_m {
             if t.kind != TaskKindName::DriveTo {
@@ -79,13 +109,37 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
     Ok(())
 }
 
+impl TaskSpecToml {
+    /// The watch this entry asks for, if it is one.
+    fn watch_kind(&self) -> Option<crate::deliberative::WatchKind> {
+        use crate::deliberative::WatchKind;
+        match self.kind {
+            TaskKindName::CloudWatch => Some(WatchKind::Clouds),
+            TaskKindName::DustDevilWatch => Some(WatchKind::DustDevils),
+            _ => None,
+        }
+    }
+
+    /// A watch's settings: the entry's fields over the defaults of `kind`.
+    fn watch_spec(&self, kind: crate::deliberative::WatchKind) -> crate::deliberative::WatchSpec {
+        let d = crate::deliberative::WatchSpec::default_for(kind);
+        crate::deliberative::WatchSpec {
+            frames: self.frames.unwrap_or(d.frames),
+            interval_s: self.interval_s.unwrap_or(d.interval_s),
+            pan: self.pan_deg.map_or(d.pan, f64::to_radians),
+            tilt: self.tilt_deg.map_or(d.tilt, f64::to_radians),
+            budget: self.budget.unwrap_or(d.budget),
+        }
+    }
+}
+
 impl Mission {
     /// The `[[tasks]]` as plan entries, with targets mapped by `to_local` (goal frame to local).
     pub fn plan_tasks(
         &self,
         to_local: &dyn Fn(f64, f64) -> rovernav_core::Point2,
     ) -> Vec<crate::deliberative::TaskSpec> {
-        use crate::deliberative::{TaskKind, TaskSpec};
+        use crate::deliberative::{TaskKind, TaskSpec, WatchKind};
         self.tasks
             .iter()
             .map(|t| {
@@ -99,6 +153,10 @@ impl Mission {
                     TaskKindName::ScienceImage => TaskKind::ScienceImage { target },
                     TaskKindName::PlaceInstrument => TaskKind::PlaceInstrument { target },
                     TaskKindName::Scoop => TaskKind::Scoop { target },
+                    TaskKindName::CloudWatch => TaskKind::CloudWatch(t.watch_spec(WatchKind::Clouds)),
+                    TaskKindName::DustDevilWatch => {
+                        TaskKind::DustDevilWatch(t.watch_spec(WatchKind::DustDevils))
+                    }
                 };
                 TaskSpec { kind, parallel: t.parallel }
             })
