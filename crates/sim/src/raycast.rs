@@ -440,17 +440,22 @@ mod tests {
         assert!(hf.cast(&dem, [-1.0, 0.5, -0.1], [1.0, 0.0, 0.0], 10.0).is_none());
     }
 
-    #[test]
-    fn closed_form_root_equals_bisection() {
-        // Random parabolas through a crossing at a known root r: f(s) = (s - r) (q2' s + k)
-        // with f(0) > 0 >= f(end); bisection is the second implementation.
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
+    /// Uniform draws in [0, 1) from a xorshift stream (`seed` non-zero).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
             s ^= s << 13;
             s ^= s >> 7;
             s ^= s << 17;
             (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        }
+    }
+
+    #[test]
+    fn closed_form_root_equals_bisection() {
+        // Random parabolas through a crossing at a known root r: f(s) = (s - r) (q2' s + k)
+        // with f(0) > 0 >= f(end); bisection is the second implementation.
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let mut checked = 0;
         for _ in 0..20_000 {
             let end = 0.01 + next() * 0.2;
@@ -483,13 +488,7 @@ mod tests {
                 *dem.heights.get_mut((seed % 37) as usize, 11) = f32::NAN;
             }
             let hf = HeightField::new(&dem);
-            let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-            let mut next = || {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 11) as f64 / (1u64 << 53) as f64
-            };
+            let mut next = uniform(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
             for _ in 0..500 {
                 let o = [-1.3 + next() * 2.4, 1.7 + next() * 1.8, -0.2 + next() * 1.4];
                 let (az, el) = (next() * 6.3, -1.5 + next() * 1.9);
