@@ -8,6 +8,7 @@ mod eval_localization;
 mod eval_science;
 mod eval_stereo;
 mod eval_terrain;
+mod eval_vtt;
 mod interactive;
 mod output;
 mod render_cmd;
@@ -72,6 +73,8 @@ enum EvalCommand {
     Stereo(eval_stereo::EvalStereoArgs),
     /// Onboard science: cloud or dust-devil detection on rendered labelled sets.
     Science(eval_science::EvalScienceArgs),
+    /// Visual target tracking: approaches to a designated rock with and without VTT.
+    Vtt(eval_vtt::EvalVttArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -206,6 +209,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Horizon(args))) => eval_horizon::run(args),
         Some(Command::Eval(EvalCommand::Stereo(args))) => eval_stereo::run(args),
         Some(Command::Eval(EvalCommand::Science(args))) => eval_science::run(args),
+        Some(Command::Eval(EvalCommand::Vtt(args))) => eval_vtt::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),

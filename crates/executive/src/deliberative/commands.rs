@@ -70,6 +70,8 @@ impl Deliberative {
                 bus.publish(topics::LOCALIZATION_RESET, pose)?;
                 format!("position set to ({x:.2}, {y:.2}), yaw {:.1} deg", pose.yaw.to_degrees())
             }
+            C::TrackPixel { row, col } => self.track(super::Designation::Pixel { row, col }),
+            C::TrackSite { x, y, z } => self.track(super::Designation::Site { x, y, z }),
             C::Status => self.status_text(),
             C::Help { topic } => match help_text(topic.as_deref()) {
                 Ok(text) => text.trim_end().to_string(),

@@ -15,6 +15,7 @@
 //! [`crate::command_language`]) and runs fault protection ([`crate::fault_protection`]): on a
 //! fault it stands every component down and ends the mission with `help_requested`.
 
+mod approach;
 mod commands;
 mod plan;
 mod science_watch;
@@ -22,8 +23,9 @@ mod tasks;
 #[cfg(test)]
 mod tests;
 
+pub use approach::{NAVIGATOR_LEG_MIN_M, TRACK_STANDOFF_M};
 pub use science_watch::{Watch, WatchKind, WatchSpec, WatchSummary};
-pub use tasks::{Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
+pub use tasks::{Designation, Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
 
 use crate::components::{JausState, Port};
 use crate::fault_protection::{Diagnosis, FaultProtection, FaultProtectionConfig};
@@ -31,7 +33,7 @@ use crate::messages::{
     ComponentStatusMsg, ControlAction, ControlMsg, EstimateMsg, FrameMsg, TaskState, TaskStatusMsg, topics,
 };
 use rovernav_bus::{Bus, BusError, Subscriber};
-use rovernav_core::{Goal, Outcome, Point2};
+use rovernav_core::{Goal, Outcome, Point2, RoverConfig};
 use std::collections::BTreeMap;
 
 /// The mission's state as the operator sees it.
@@ -89,6 +91,14 @@ pub struct Deliberative {
     operator: Subscriber<String>,
     /// Science watches in progress, by task id.
     watches: BTreeMap<u64, science_watch::WatchRun>,
+    /// The rover (its Navcam calibration, for target tracking).
+    rover: RoverConfig,
+    /// Navcam image size (px).
+    navcam_width: usize,
+    /// Approaches in progress, by task id.
+    approaches: BTreeMap<u64, approach::ApproachRun>,
+    /// The last Navcam pair taken (what `track ROW COL` designates on).
+    last_navcam: Option<approach::LastNavcam>,
 }
 
 impl Deliberative {
@@ -135,6 +145,10 @@ impl Deliberative {
             components_sub: bus.subscribe(topics::SYSTEM_STATUS)?,
             operator: bus.subscribe(topics::OPERATOR_COMMAND)?,
             watches: BTreeMap::new(),
+            rover: RoverConfig::default(),
+            navcam_width: 512,
+            approaches: BTreeMap::new(),
+            last_navcam: None,
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -144,6 +158,14 @@ impl Deliberative {
             me.push(t.kind, t.parallel, Role::Extra);
         }
         Ok(me)
+    }
+
+    /// The rover whose Navcams target tracking uses, and their image size (px); the default
+    /// rover and 512 px otherwise.
+    pub fn with_rover(mut self, rover: RoverConfig, navcam_width: usize) -> Self {
+        self.rover = rover;
+        self.navcam_width = navcam_width;
+        self
     }
 
     fn push(&mut self, kind: TaskKind, parallel: bool, role: Role) {
@@ -237,6 +259,7 @@ impl Deliberative {
         }
         if self.state == MissionState::Running {
             self.pump_watches(bus)?;
+            self.pump_approaches(bus)?;
             self.advance(bus)?;
         }
         Ok(())
@@ -249,6 +272,7 @@ impl Deliberative {
         }
         for f in &frames {
             self.watch_frame(f);
+            self.approach_frame(f);
             self.time_s = f.t;
             if f.request().is_some() {
                 self.cycles += 1;
@@ -272,6 +296,10 @@ impl Deliberative {
             }
             let task = &mut self.tasks[i];
             if task.state.is_final() {
+                continue;
+            }
+            if matches!(task.kind, TaskKind::ApproachTarget { .. }) {
+                self.approach_status(i, &s);
                 continue;
             }
             if task.aiming && s.state == TaskState::Success {

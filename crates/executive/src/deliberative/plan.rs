@@ -93,6 +93,7 @@ impl Deliberative {
                 };
                 bus.publish(topics::EXECUTIVE_MOTION, request)?;
             }
+            TaskKind::ApproachTarget { .. } => return self.start_approach(bus, i, cmd),
         }
         Ok(())
     }

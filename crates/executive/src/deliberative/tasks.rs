@@ -2,6 +2,7 @@
 
 use crate::messages::TaskState;
 use rovernav_core::Point2;
+pub use rovernav_vision::tracking::Designation;
 
 /// What a task does.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +36,13 @@ pub enum TaskKind {
         /// Target (world frame, m).
         target: Point2,
     },
+    /// Drive to a designated target by visual target tracking and stop at a stand-off.
+    ApproachTarget {
+        /// The target: a Navcam pixel or a site-frame point.
+        designation: Designation,
+        /// Horizontal stand-off from the rover's origin to the target (m).
+        standoff: f64,
+    },
 }
 
 /// Something a task occupies while it runs; parallel tasks must not share one.
@@ -59,6 +67,7 @@ impl TaskKind {
             TaskKind::ScienceImage { .. } => "science_image",
             TaskKind::PlaceInstrument { .. } => "place_instrument",
             TaskKind::Scoop { .. } => "scoop",
+            TaskKind::ApproachTarget { .. } => "approach_target",
         }
     }
 
@@ -70,14 +79,17 @@ impl TaskKind {
             | TaskKind::ScienceImage { target }
             | TaskKind::PlaceInstrument { target }
             | TaskKind::Scoop { target } => Some(target),
-            TaskKind::Panorama => None,
+            TaskKind::ApproachTarget { designation: Designation::Site { x, y, .. }, .. } => {
+                Some(Point2::new(x, y))
+            }
+            TaskKind::Panorama | TaskKind::ApproachTarget { .. } => None,
         }
     }
 
     /// What the task occupies.
     pub fn resources(&self) -> &'static [Resource] {
         match self {
-            TaskKind::DriveTo { .. } => &[Resource::Wheels, Resource::Mast],
+            TaskKind::DriveTo { .. } | TaskKind::ApproachTarget { .. } => &[Resource::Wheels, Resource::Mast],
             // The rover stands still while it watches.
             TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => &[Resource::Wheels, Resource::Mast],
             TaskKind::Panorama | TaskKind::ScienceImage { .. } => &[Resource::Mast],
@@ -86,6 +98,9 @@ impl TaskKind {
     }
 
     pub(super) fn describe(&self) -> String {
+        if let TaskKind::ApproachTarget { designation: Designation::Pixel { row, col }, .. } = self {
+            return format!("{} (pixel row {row:.1}, col {col:.1})", self.name());
+        }
         match self.target() {
             Some(t) => format!("{} ({:.2}, {:.2})", self.name(), t.x, t.y),
             None => self.name().to_string(),

@@ -21,6 +21,8 @@ pub enum TaskKindName {
     CloudWatch,
     /// Stop and watch the horizon for dust devils (the same fields).
     DustDevilWatch,
+    /// Drive to the target `x`, `y`, `z` by visual target tracking, stopping `standoff_m` short.
+    ApproachTarget,
 }
 
 /// One `[[tasks]]` entry.
@@ -45,6 +47,10 @@ pub struct TaskSpecToml {
     pub tilt_deg: Option<f64>,
     /// Downlink budget of a watch (fraction of its raw volume; default 0.1).
     pub budget: Option<f64>,
+    /// Target height of an `approach_target` (m, site frame; default 0).
+    pub z: Option<f64>,
+    /// Stand-off of an `approach_target` (m; default 1).
+    pub standoff_m: Option<f64>,
     /// Start together with the previous task (they must need different resources).
     #[serde(default)]
     pub parallel: bool,
@@ -72,6 +78,16 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
         }
         if [t.x, t.y].iter().flatten().any(|v| !v.is_finite()) {
             return Err((field("x"), "target coordinates must be finite numbers".into()));
+        }
+        if (t.z.is_some() || t.standoff_m.is_some()) && t.kind != TaskKindName::ApproachTarget {
+            let name = if t.z.is_some() { "z" } else { "standoff_m" };
+            return Err((field(name), "only an approach_target takes it".into()));
+        }
+        if t.z.is_some_and(|z| !z.is_finite()) {
+            return Err((field("z"), "must be a finite number".into()));
+        }
+        if t.standoff_m.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
+            return Err((field("standoff_m"), "must be a non-negative number of metres".into()));
         }
         if let Some(kind) = t.watch_kind() {
             if let Err((name, why)) = t.watch_spec(kind).check(kind) {
@@ -157,6 +173,14 @@ impl Mission {
                     TaskKindName::DustDevilWatch => {
                         TaskKind::DustDevilWatch(t.watch_spec(WatchKind::DustDevils))
                     }
+                    TaskKindName::ApproachTarget => TaskKind::ApproachTarget {
+                        designation: crate::deliberative::Designation::Site {
+                            x: target.x,
+                            y: target.y,
+                            z: t.z.unwrap_or(0.0),
+                        },
+                        standoff: t.standoff_m.unwrap_or(crate::deliberative::TRACK_STANDOFF_M),
+                    },
                 };
                 TaskSpec { kind, parallel: t.parallel }
             })

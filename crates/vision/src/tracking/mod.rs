@@ -151,6 +151,10 @@ pub struct TrackParams {
     pub jump_gate: f64,
     /// Search window sizing.
     pub window: WindowParams,
+    /// The template is re-cut from a tracked image only once the range has shrunk (or grown)
+    /// by this ratio since the last cut (1: every image). Each re-cut carries the match's
+    /// subpixel error into the template, so fewer cuts drift less.
+    pub recut_ratio: f64,
 }
 
 impl Default for TrackParams {
@@ -163,6 +167,7 @@ impl Default for TrackParams {
             exclusion_px: 4.0,
             jump_gate: 3.0,
             window: WindowParams::default(),
+            recut_ratio: 1.0,
         }
     }
 }
@@ -321,16 +326,20 @@ impl Tracker {
 
     /// Takes a successful match: the target's pixel, its new range and position (from point
     /// stereo), and the camera roll of `image`; the next template is cut from `image` (it
-    /// follows the target's changing look; subpixel errors add up step by step).
+    /// follows the target's changing look; subpixel errors add up step by step) once the range
+    /// has changed by `recut_ratio` since the last cut.
     pub fn accept(&mut self, image: &GreyF32, target: Target, roll_rad: f64) -> Result<(), TrackError> {
         if !(target.range_m.is_finite() && target.range_m > 0.0) {
             return Err(TrackError::Parameter(format!("range {} m must be positive", target.range_m)));
         }
-        let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
-        self.reference = reference;
-        self.reference_pixel = pixel;
-        self.reference_range_m = target.range_m;
-        self.reference_roll_rad = roll_rad;
+        let ratio = self.reference_range_m / target.range_m;
+        if ratio >= self.params.recut_ratio || ratio <= 1.0 / self.params.recut_ratio {
+            let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
+            self.reference = reference;
+            self.reference_pixel = pixel;
+            self.reference_range_m = target.range_m;
+            self.reference_roll_rad = roll_rad;
+        }
         self.target = target;
         Ok(())
     }
