@@ -294,7 +294,8 @@ pub(crate) fn wire_deliberative(
         mast_range_m: world.rover.mast_range,
         fault_protection: options.fault_protection.clone(),
     };
-    let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?;
+    let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?
+        .with_rover(world.rover.clone(), world.sensor_model.navcam.width);
     let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
     let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
     runtime.initialize(0.0)?;
