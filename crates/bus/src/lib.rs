@@ -2,7 +2,8 @@
 //! topic name (paper 004 section 2: JAUS components "collaborate by exchanging well-defined
 //! messages").
 //!
-//! - [`Topic`]: a topic name bound to its message type (any serde type).
+//! - [`Topic`]: a topic name bound to its message type (any serde type; [`Topic::schema`] for one with a JSON Schema).
+//! - [`schema`]: the message types' derived JSON Schemas and a checker for them.
 //! - [`Transport`]: the byte-level seam a networked transport (zenoh) implements.
 //! - [`InProcessTransport`]: the deterministic in-process transport.
 //! - [`Bus`]: the typed front the components use; in process it skips serialization, over a
@@ -13,6 +14,7 @@
 //! an adapter (a telemetry recorder, a zenoh bridge) can depend on it alone.
 
 pub mod bus;
+pub mod schema;
 pub mod topic;
 pub mod transport;
 

@@ -1,6 +1,7 @@
 //! Typed topic handles and the JSON codec every transport uses.
 
 use crate::transport::BusError;
+use schemars::JsonSchema;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::marker::PhantomData;
@@ -45,6 +46,14 @@ impl<T> Topic<T> {
     /// The message type's name without its module path (a schema name for recorders).
     pub fn type_name(&self) -> &'static str {
         short_type_name::<T>()
+    }
+
+    /// The message type's JSON Schema.
+    pub fn schema(&self) -> serde_json::Value
+    where
+        T: JsonSchema,
+    {
+        crate::schema::schema_of::<T>()
     }
 }
 

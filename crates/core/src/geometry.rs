@@ -1,9 +1,11 @@
 //! Plane and space poses and small angle helpers.
 
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// A point in the plane (metres).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Point2 {
     /// East (world) or forward (body) coordinate.
     pub x: f64,
@@ -57,7 +59,7 @@ impl Point2 {
 }
 
 /// A planar pose: position and heading (yaw, counter-clockwise from east).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Pose2 {
     /// East (m).
     pub x: f64,
@@ -90,19 +92,31 @@ impl Pose2 {
 }
 
 /// A full 3D pose: position and roll/pitch/yaw (ZYX Euler angles, ROS convention).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Pose3 {
     /// East (m).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub x: f64,
     /// North (m).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub y: f64,
     /// Up (m).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub z: f64,
     /// Rotation about the body x axis (rad); positive rolls the left side up.
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub roll: f64,
     /// Rotation about the body y axis (rad); positive pitches the nose down (REP 103).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub pitch: f64,
     /// Heading (rad).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub yaw: f64,
 }
 

@@ -3,8 +3,11 @@
 //! Row 0 is the southern edge (minimum y), so that grid indices grow with world coordinates;
 //! loaders of north-up images flip rows on load.
 
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
 /// Placement and size of a grid in the world frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct GridGeometry {
     /// Number of columns (along x).
     pub cols: usize,

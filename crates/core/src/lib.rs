@@ -2,14 +2,17 @@
 //! configuration and the navigator interface.
 //!
 //! Frames follow ROS conventions (REP 103): the world frame is x east, y north, z up; the rover
-//! body frame is x forward, y left, z up; angles in radians, lengths in metres. This crate has no
-//! dependencies so that every algorithm crate can use it without pulling in I/O or middleware.
+//! body frame is x forward, y left, z up; angles in radians, lengths in metres. This crate does no
+//! I/O and knows no middleware, so every algorithm crate can use it; its message types derive
+//! `Serialize`, `Deserialize` and `schemars::JsonSchema` once, and the bus and the MCAP log carry
+//! them as they are ([`wire`] says how a few fields travel).
 
 pub mod geometry;
 pub mod grid;
 pub mod nav;
 pub mod rover;
 pub mod sensors;
+pub mod wire;
 
 pub use geometry::{Point2, Pose2, Pose3, angle_diff, wrap_angle};
 pub use grid::{Grid2, GridGeometry};

@@ -5,9 +5,12 @@
 //! command: sense (which wedges), drive an arc, turn in place, or finish with an outcome.
 
 use crate::{Point2, Pose3, SensorFrame};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// How a traverse ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// The rover believes it is at the goal.
     Reached,
@@ -41,7 +44,7 @@ impl Outcome {
 }
 
 /// The goal of a traverse.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Goal {
     /// Goal position (world frame, m).
     pub position: Point2,
@@ -54,16 +57,19 @@ pub struct Goal {
 }
 
 /// The autonomy's belief about the rover pose.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PoseEstimate {
     /// Estimated pose.
     pub pose: Pose3,
-    /// Covariance of (x, y, yaw).
+    /// Covariance of (x, y, yaw); a non-finite entry travels as `null` and reads back as NaN.
+    #[serde(deserialize_with = "crate::wire::nan_from_null_matrix")]
+    #[schemars(with = "[[Option<f64>; 3]; 3]")]
     pub covariance: [[f64; 3]; 3],
 }
 
 /// A request for range data.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum SenseRequest {
     /// Point the mast stereo pair at a body-frame pan angle (rad) and image one wedge.
     Mast {
@@ -97,7 +103,7 @@ pub enum SenseRequest {
 }
 
 /// Conditions that stop a motion early, as a real rover's guarded moves do.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct DriveGuard {
     /// Stop when any proximity sensor triggers.
     pub proximity: bool,
@@ -106,7 +112,8 @@ pub struct DriveGuard {
 }
 
 /// One command from a navigator to the platform.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum NavCommand {
     /// Acquire range data.
     Sense(Vec<SenseRequest>),
@@ -146,7 +153,8 @@ pub struct NavInput<'a> {
 }
 
 /// A drawing primitive a navigator exposes for the traverse picture.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum Overlay {
     /// A closed polygon (e.g. a C-obstacle), world frame.
     Polygon(Vec<Point2>, OverlayKind),
@@ -155,7 +163,8 @@ pub enum Overlay {
 }
 
 /// What an overlay shows, to choose its colour.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum OverlayKind {
     /// A planned path.
     Plan,

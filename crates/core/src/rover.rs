@@ -4,8 +4,11 @@
 //! with a 30-45 deg stereo pair, body stereo pairs fore and aft with 80-100 deg; paper 001: SR2
 //! with ten forward proximity sensors; paper 004 section 3.2: gyro, inclinometer, odometry).
 
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
 /// Physical and sensing parameters of the rover.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct RoverConfig {
     /// Body length (m).
     pub length: f64,

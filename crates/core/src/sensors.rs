@@ -3,8 +3,12 @@
 //! Exteroceptive data is expressed in the rover body frame at the time of capture; the autonomy
 //! places it in the world with its own pose estimate, never with ground truth.
 
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
 /// Which camera pair (or range sensor) produced a point cloud.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum CameraKind {
     /// Stereo pair on the pan/tilt mast.
     Mast,
@@ -29,7 +33,7 @@ impl CameraKind {
 }
 
 /// The visible region of one range image: a wedge in the body frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Wedge {
     /// Bearing of the wedge centre in the body frame (rad, counter-clockwise from forward).
     pub bearing: f64,
@@ -53,7 +57,7 @@ impl Wedge {
 }
 
 /// A cloud of 3D points from one range image, in the body frame at capture time.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PointCloud {
     /// Sensor that produced it.
     pub camera: CameraKind,
@@ -61,12 +65,15 @@ pub struct PointCloud {
     pub origin: [f64; 3],
     /// The region it covers (planar, body frame).
     pub wedge: Wedge,
-    /// Points (x forward, y left, z up) in metres, body frame.
+    /// Points (x forward, y left, z up) in metres, body frame (base64 of little-endian f32 on the wire).
+    #[serde(with = "crate::wire::points_base64")]
+    #[schemars(with = "String", extend("contentEncoding" = "base64"))]
     pub points: Vec<[f32; 3]>,
 }
 
 /// The ten forward proximity threshold sensors of SR2 (paper 001), grouped in clusters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(transparent)]
 pub struct ProximityReading {
     /// Raw sensors, index 0 leftmost; true when something is closer than the threshold.
     pub raw: [bool; 10],
@@ -92,24 +99,32 @@ impl ProximityReading {
 }
 
 /// Inertial and attitude sensors sampled together.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ImuSample {
     /// Time (s).
     pub t: f64,
     /// Yaw rate from the gyro (rad/s), including bias and noise.
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub gyro_z: f64,
     /// Roll from the inclinometer (rad).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub incl_roll: f64,
     /// Pitch from the inclinometer (rad).
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub incl_pitch: f64,
     /// Magnetic/compass heading (rad, counter-clockwise from east); NaN on a faulty sensor.
+    #[serde(deserialize_with = "crate::wire::nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub compass_yaw: f64,
     /// Heading from the sun sensor (rad), when the sun is visible.
     pub sun_yaw: Option<f64>,
 }
 
 /// Cumulative wheel encoder counts.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct OdometrySample {
     /// Time (s).
     pub t: f64,
@@ -120,7 +135,7 @@ pub struct OdometrySample {
 }
 
 /// A camera image as the platform reports it: grey, row-major, up to 16 bits per pixel.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct CameraImage {
     /// The camera's name (`navcam_left`, `hazcam_front_left`, ...).
     pub camera: String,
@@ -132,16 +147,20 @@ pub struct CameraImage {
     pub height: u32,
     /// Bits per pixel used (12 for the rover's cameras).
     pub bits: u8,
-    /// Pixel values, row-major, `width * height` of them.
+    /// Pixel values, row-major, `width * height` of them (base64 of little-endian u16 on the wire).
+    #[serde(with = "crate::wire::pixels_base64")]
+    #[schemars(with = "String", extend("contentEncoding" = "base64"))]
     pub pixels: Vec<u16>,
     /// Mast pan when taken, counter-clockwise from forward (rad; 0 for body-fixed cameras).
+    #[serde(default)]
     pub pan: f64,
     /// Mast tilt when taken, positive up (rad; 0 for body-fixed cameras).
+    #[serde(default)]
     pub tilt: f64,
 }
 
 /// Everything the platform reports after executing one command.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SensorFrame {
     /// Time at the end of the command (s).
     pub t: f64,

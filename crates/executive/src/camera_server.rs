@@ -105,13 +105,7 @@ mod tests {
         FrameMsg {
             seq: 1,
             source: FrameSource::Hold,
-            t: 0.0,
-            clouds: vec![],
-            imu: vec![],
-            odometry: vec![],
-            proximity: [false; 10],
-            motion_stopped: None,
-            images,
+            frame: rovernav_core::SensorFrame { images, ..Default::default() },
         }
     }
 

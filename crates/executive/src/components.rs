@@ -17,7 +17,7 @@ use std::any::Any;
 pub const DEFAULT_RATE_HZ: f64 = 10.0;
 
 /// The six JAUS component states.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum JausState {
     /// Starting up: subscribing, loading, taking first data.
     Initialization,

@@ -1,18 +1,43 @@
 //! The messages the components exchange on the bus, and the topics that carry them.
 //!
-//! Message types are serde mirrors of the core types (the core crate stays dependency-free), with
-//! exact conversions both ways, so a component that receives a message hands the autonomy the
-//! very value the sender had. Frames and units follow ROS conventions (REP 103): world x east,
-//! y north, z up; body x forward, y left, z up; metres, radians, seconds. A non-finite number
-//! (a faulty compass reads NaN) travels as JSON `null` and comes back as NaN.
+//! One message set: a message that carries a core type carries it as it is (the core types
+//! derive `Serialize`, `Deserialize` and `JsonSchema`); the names below that are core types
+//! (`PoseMsg` is `Pose3`, `CloudMsg` is `PointCloud`, ...) are aliases kept for the call sites.
+//! The types defined here add only what the bus needs around them: sequence numbers,
+//! requesters, task ids and component states. Frames and units follow ROS conventions
+//! (REP 103): world x east, y north, z up; body x forward, y left, z up; metres, radians,
+//! seconds. A non-finite number (a faulty compass reads NaN) travels as JSON `null` and comes
+//! back as NaN ([`rovernav_core::wire`]).
 
 use crate::components::JausState;
 use rovernav_bus::Topic;
 use rovernav_core::{
-    CameraImage, CameraKind, DriveGuard, Goal, ImuSample, NavCommand, OdometrySample, Outcome, Point2,
-    PointCloud, Pose3, PoseEstimate, ProximityReading, SenseRequest, SensorFrame, Wedge,
+    CameraImage, CameraKind, Goal, ImuSample, NavCommand, OdometrySample, PointCloud, Pose3, PoseEstimate,
+    SenseRequest, SensorFrame, Wedge,
 };
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+
+/// A 3D pose (world frame; roll, pitch, yaw in rad).
+pub type PoseMsg = Pose3;
+/// Which sensor produced a cloud.
+pub type CameraMsg = CameraKind;
+/// The region a range image covers (body frame).
+pub type WedgeMsg = Wedge;
+/// One range image: points in the body frame at capture.
+pub type CloudMsg = PointCloud;
+/// One inertial sample (gyro, inclinometer, compass, sun sensor).
+pub type ImuMsg = ImuSample;
+/// Cumulative wheel encoder counts.
+pub type OdometryMsg = OdometrySample;
+/// A range request.
+pub type SenseMsg = SenseRequest;
+/// A command for the platform, or a navigator's next command.
+pub type CommandMsg = NavCommand;
+/// One grey camera image.
+pub type ImageMsg = CameraImage;
+/// A goal: position, arrival tolerance, waypoints and keep-out zones (world frame).
+pub type GoalMsg = Goal;
 
 /// Every topic of the stack, by layer.
 pub mod topics {
@@ -52,82 +77,47 @@ pub mod topics {
     pub const OPERATOR_COMMAND: Topic<String> = Topic::new("/operator/command");
     /// Deliberative layer -> operator: the answer to a command line.
     pub const OPERATOR_REPLY: Topic<String> = Topic::new("/operator/reply");
-}
 
-/// Serializes non-finite floats as `null` and reads `null` back as NaN (JSON has no NaN).
-mod nan_as_null {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() { s.serialize_f64(*v) } else { s.serialize_none() }
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-    }
-}
-
-/// [`nan_as_null`] for a 3x3 matrix.
-mod nan_as_null_matrix {
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    pub fn serialize<S: Serializer>(m: &[[f64; 3]; 3], s: S) -> Result<S::Ok, S::Error> {
-        let rows = m.map(|row| row.map(|v| v.is_finite().then_some(v)));
-        rows.serialize(s)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[[f64; 3]; 3], D::Error> {
-        let rows = <[[Option<f64>; 3]; 3]>::deserialize(d)?;
-        Ok(rows.map(|row| row.map(|v| v.unwrap_or(f64::NAN))))
-    }
-}
-
-/// A 3D pose (world frame; roll, pitch, yaw in rad).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct PoseMsg {
-    /// East (m).
-    #[serde(with = "nan_as_null")]
-    pub x: f64,
-    /// North (m).
-    #[serde(with = "nan_as_null")]
-    pub y: f64,
-    /// Up (m).
-    #[serde(with = "nan_as_null")]
-    pub z: f64,
-    /// Roll (rad).
-    #[serde(with = "nan_as_null")]
-    pub roll: f64,
-    /// Pitch (rad).
-    #[serde(with = "nan_as_null")]
-    pub pitch: f64,
-    /// Yaw, counter-clockwise from east (rad).
-    #[serde(with = "nan_as_null")]
-    pub yaw: f64,
-}
-
-impl From<Pose3> for PoseMsg {
-    fn from(p: Pose3) -> Self {
-        Self { x: p.x, y: p.y, z: p.z, roll: p.roll, pitch: p.pitch, yaw: p.yaw }
-    }
-}
-
-impl From<PoseMsg> for Pose3 {
-    fn from(p: PoseMsg) -> Self {
-        Pose3 { x: p.x, y: p.y, z: p.z, roll: p.roll, pitch: p.pitch, yaw: p.yaw }
+    /// Every topic above with its message type's derived JSON Schema (a recorder's channel
+    /// schema for the messages it taps off the bus).
+    pub fn all() -> Vec<(&'static str, serde_json::Value)> {
+        fn row<T: JsonSchema>(t: Topic<T>) -> (&'static str, serde_json::Value) {
+            (t.name(), t.schema())
+        }
+        vec![
+            row(PLATFORM_FRAME),
+            row(CAMERA_IMAGE),
+            row(PLATFORM_COMMAND),
+            row(PLATFORM_HOLD),
+            row(NAVIGATION_COMMAND),
+            row(NAVIGATION_PLAN),
+            row(EXECUTIVE_MOTION),
+            row(EXECUTIVE_DRIVE_TO),
+            row(EXECUTIVE_CANCEL),
+            row(ARM_COMMAND),
+            row(TASK_STATUS),
+            row(LOCALIZATION_ESTIMATE),
+            row(LOCALIZATION_RESET),
+            row(SYSTEM_CONTROL),
+            row(SYSTEM_STATUS),
+            row(OPERATOR_COMMAND),
+            row(OPERATOR_REPLY),
+        ]
     }
 }
 
 /// The pose estimator's belief after integrating a frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct EstimateMsg {
     /// Sequence number of the last frame integrated.
     pub frame_seq: u64,
     /// Time of that frame (s).
     pub t: f64,
     /// Estimated pose.
-    pub pose: PoseMsg,
-    /// Covariance of (x, y, yaw).
-    #[serde(with = "nan_as_null_matrix")]
+    pub pose: Pose3,
+    /// Covariance of (x, y, yaw); a non-finite entry travels as `null`.
+    #[serde(deserialize_with = "rovernav_core::wire::nan_from_null_matrix")]
+    #[schemars(with = "[[Option<f64>; 3]; 3]")]
     pub covariance: [[f64; 3]; 3],
     /// The localiser's localisation target: the body-frame mast pan (rad) predicted to localise
     /// best from here (absent when the localiser does not match terrain).
@@ -138,292 +128,12 @@ pub struct EstimateMsg {
 impl EstimateMsg {
     /// The core estimate.
     pub fn estimate(&self) -> PoseEstimate {
-        PoseEstimate { pose: self.pose.into(), covariance: self.covariance }
-    }
-}
-
-/// Which sensor produced a cloud.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CameraMsg {
-    /// Mast stereo pair.
-    Mast,
-    /// Forward body stereo pair.
-    BodyFront,
-    /// Rear body stereo pair.
-    BodyRear,
-    /// Nodding LIDAR.
-    Lidar,
-}
-
-impl From<CameraKind> for CameraMsg {
-    fn from(c: CameraKind) -> Self {
-        match c {
-            CameraKind::Mast => Self::Mast,
-            CameraKind::BodyFront => Self::BodyFront,
-            CameraKind::BodyRear => Self::BodyRear,
-            CameraKind::Lidar => Self::Lidar,
-        }
-    }
-}
-
-impl From<CameraMsg> for CameraKind {
-    fn from(c: CameraMsg) -> Self {
-        match c {
-            CameraMsg::Mast => Self::Mast,
-            CameraMsg::BodyFront => Self::BodyFront,
-            CameraMsg::BodyRear => Self::BodyRear,
-            CameraMsg::Lidar => Self::Lidar,
-        }
-    }
-}
-
-/// The region a range image covers (body frame).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct WedgeMsg {
-    /// Bearing of the wedge centre (rad, counter-clockwise from forward).
-    pub bearing: f64,
-    /// Half the field of view (rad).
-    pub half_angle: f64,
-    /// Nearest range (m).
-    pub min_range: f64,
-    /// Far range (m).
-    pub max_range: f64,
-}
-
-/// One range image: points in the body frame at capture (x forward, y left, z up; m).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CloudMsg {
-    /// Sensor.
-    pub camera: CameraMsg,
-    /// Sensor origin in the body frame (m).
-    pub origin: [f64; 3],
-    /// Covered region.
-    pub wedge: WedgeMsg,
-    /// Points.
-    pub points: Vec<[f32; 3]>,
-}
-
-impl From<&PointCloud> for CloudMsg {
-    fn from(c: &PointCloud) -> Self {
-        let w = c.wedge;
-        Self {
-            camera: c.camera.into(),
-            origin: c.origin,
-            wedge: WedgeMsg {
-                bearing: w.bearing,
-                half_angle: w.half_angle,
-                min_range: w.min_range,
-                max_range: w.max_range,
-            },
-            points: c.points.clone(),
-        }
-    }
-}
-
-impl From<&CloudMsg> for PointCloud {
-    fn from(c: &CloudMsg) -> Self {
-        let w = c.wedge;
-        Self {
-            camera: c.camera.into(),
-            origin: c.origin,
-            wedge: Wedge {
-                bearing: w.bearing,
-                half_angle: w.half_angle,
-                min_range: w.min_range,
-                max_range: w.max_range,
-            },
-            points: c.points.clone(),
-        }
-    }
-}
-
-/// One inertial sample (gyro, inclinometer, compass, sun sensor).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ImuMsg {
-    /// Time (s).
-    pub t: f64,
-    /// Yaw rate (rad/s).
-    #[serde(with = "nan_as_null")]
-    pub gyro_z: f64,
-    /// Inclinometer roll (rad).
-    #[serde(with = "nan_as_null")]
-    pub incl_roll: f64,
-    /// Inclinometer pitch (rad).
-    #[serde(with = "nan_as_null")]
-    pub incl_pitch: f64,
-    /// Compass heading (rad, counter-clockwise from east); NaN from a faulty compass.
-    #[serde(with = "nan_as_null")]
-    pub compass_yaw: f64,
-    /// Sun-sensor heading (rad) when the sun is visible.
-    pub sun_yaw: Option<f64>,
-}
-
-impl From<&ImuSample> for ImuMsg {
-    fn from(s: &ImuSample) -> Self {
-        Self {
-            t: s.t,
-            gyro_z: s.gyro_z,
-            incl_roll: s.incl_roll,
-            incl_pitch: s.incl_pitch,
-            compass_yaw: s.compass_yaw,
-            sun_yaw: s.sun_yaw,
-        }
-    }
-}
-
-impl From<&ImuMsg> for ImuSample {
-    fn from(s: &ImuMsg) -> Self {
-        Self {
-            t: s.t,
-            gyro_z: s.gyro_z,
-            incl_roll: s.incl_roll,
-            incl_pitch: s.incl_pitch,
-            compass_yaw: s.compass_yaw,
-            sun_yaw: s.sun_yaw,
-        }
-    }
-}
-
-/// Cumulative wheel encoder counts.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct OdometryMsg {
-    /// Time (s).
-    pub t: f64,
-    /// Left side counts.
-    pub left_counts: i64,
-    /// Right side counts.
-    pub right_counts: i64,
-}
-
-/// A range request.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SenseMsg {
-    /// Mast stereo at a body-frame pan (rad).
-    Mast {
-        /// Pan (rad).
-        pan: f64,
-    },
-    /// Full-resolution mast stereo at a body-frame pan (rad).
-    MastFine {
-        /// Pan (rad).
-        pan: f64,
-    },
-    /// Forward body stereo.
-    BodyFront,
-    /// Rear body stereo.
-    BodyRear,
-    /// LIDAR sweep at a pan (rad).
-    Lidar {
-        /// Pan (rad).
-        pan: f64,
-    },
-    /// Both Navcam images at a pan and tilt (rad).
-    Navcam {
-        /// Pan (rad).
-        pan: f64,
-        /// Tilt (rad, positive up).
-        tilt: f64,
-    },
-}
-
-/// A command for the platform, the wire form of [`NavCommand`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CommandMsg {
-    /// Acquire range images.
-    Sense {
-        /// Requested images.
-        requests: Vec<SenseMsg>,
-    },
-    /// Drive an arc.
-    Drive {
-        /// Signed arc length (m).
-        distance: f64,
-        /// Curvature (1/m, positive left).
-        curvature: f64,
-        /// Stop when a proximity sensor triggers.
-        proximity_guard: bool,
-        /// Stop beyond this tilt (rad).
-        max_tilt: Option<f64>,
-    },
-    /// Turn in place (rad, positive counter-clockwise).
-    Turn {
-        /// Signed angle (rad).
-        angle: f64,
-    },
-    /// The navigator is done (never sent to the platform).
-    Finish {
-        /// `report.json` outcome name.
-        outcome: String,
-        /// Why.
-        message: String,
-    },
-}
-
-impl From<&NavCommand> for CommandMsg {
-    fn from(c: &NavCommand) -> Self {
-        match c {
-            NavCommand::Sense(requests) => Self::Sense {
-                requests: requests
-                    .iter()
-                    .map(|r| match *r {
-                        SenseRequest::Mast { pan } => SenseMsg::Mast { pan },
-                        SenseRequest::MastFine { pan } => SenseMsg::MastFine { pan },
-                        SenseRequest::BodyFront => SenseMsg::BodyFront,
-                        SenseRequest::BodyRear => SenseMsg::BodyRear,
-                        SenseRequest::Lidar { pan } => SenseMsg::Lidar { pan },
-                        SenseRequest::Navcam { pan, tilt } => SenseMsg::Navcam { pan, tilt },
-                    })
-                    .collect(),
-            },
-            NavCommand::Drive { distance, curvature, guard } => Self::Drive {
-                distance: *distance,
-                curvature: *curvature,
-                proximity_guard: guard.proximity,
-                max_tilt: guard.max_tilt,
-            },
-            NavCommand::Turn { angle } => Self::Turn { angle: *angle },
-            NavCommand::Finish(outcome, message) => {
-                Self::Finish { outcome: outcome.as_str().to_string(), message: message.clone() }
-            }
-        }
-    }
-}
-
-impl CommandMsg {
-    /// The core command (an unknown outcome name reads as `aborted`).
-    pub fn command(&self) -> NavCommand {
-        match self {
-            Self::Sense { requests } => NavCommand::Sense(
-                requests
-                    .iter()
-                    .map(|r| match *r {
-                        SenseMsg::Mast { pan } => SenseRequest::Mast { pan },
-                        SenseMsg::MastFine { pan } => SenseRequest::MastFine { pan },
-                        SenseMsg::BodyFront => SenseRequest::BodyFront,
-                        SenseMsg::BodyRear => SenseRequest::BodyRear,
-                        SenseMsg::Lidar { pan } => SenseRequest::Lidar { pan },
-                        SenseMsg::Navcam { pan, tilt } => SenseRequest::Navcam { pan, tilt },
-                    })
-                    .collect(),
-            ),
-            Self::Drive { distance, curvature, proximity_guard, max_tilt } => NavCommand::Drive {
-                distance: *distance,
-                curvature: *curvature,
-                guard: DriveGuard { proximity: *proximity_guard, max_tilt: *max_tilt },
-            },
-            Self::Turn { angle } => NavCommand::Turn { angle: *angle },
-            Self::Finish { outcome, message } => {
-                NavCommand::Finish(Outcome::parse(outcome).unwrap_or(Outcome::Aborted), message.clone())
-            }
-        }
+        PoseEstimate { pose: self.pose, covariance: self.covariance }
     }
 }
 
 /// Who asked for a platform command.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Origin {
     /// The navigator, driving a mission leg.
@@ -435,7 +145,7 @@ pub enum Origin {
 }
 
 /// A platform command with its id and requester.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct MotionRequest {
     /// Unique per requester and run.
     pub id: u64,
@@ -446,14 +156,14 @@ pub struct MotionRequest {
 }
 
 /// Stand still and keep sampling until a time.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct HoldMsg {
     /// Simulated time to hold until (s).
     pub until_s: f64,
 }
 
 /// What produced a frame.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum FrameSource {
     /// Samples at rest before the first command.
@@ -464,141 +174,35 @@ pub enum FrameSource {
     Command(MotionRequest),
 }
 
-/// What the platform's sensors reported after one action.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// What the platform's sensors reported after one action: a core frame with its number and
+/// what produced it. It dereferences to the frame (`msg.clouds`, `msg.t`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct FrameMsg {
     /// Frame number (0 for the initial frame).
     pub seq: u64,
     /// What produced it.
     pub source: FrameSource,
-    /// Time at the end of the action (s).
-    pub t: f64,
-    /// Range images.
-    pub clouds: Vec<CloudMsg>,
-    /// Inertial samples in time order.
-    pub imu: Vec<ImuMsg>,
-    /// Encoder samples in time order.
-    pub odometry: Vec<OdometryMsg>,
-    /// The ten proximity sensors at the end, leftmost first.
-    pub proximity: [bool; 10],
-    /// Why a motion stopped early, if it did.
-    pub motion_stopped: Option<String>,
-    /// Camera images taken during the action.
-    #[serde(default)]
-    pub images: Vec<ImageMsg>,
+    /// The sensor data.
+    pub frame: SensorFrame,
 }
 
-/// One grey camera image.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ImageMsg {
-    /// The camera's name.
-    pub camera: String,
-    /// Time of exposure (s).
-    pub t: f64,
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Bits per pixel used.
-    pub bits: u8,
-    /// Pixel values, row-major (base64 of little-endian u16 on the wire).
-    #[serde(with = "pixels_base64")]
-    pub pixels: Vec<u16>,
-    /// Mast pan when taken (rad).
-    #[serde(default)]
-    pub pan: f64,
-    /// Mast tilt when taken (rad).
-    #[serde(default)]
-    pub tilt: f64,
-}
+impl std::ops::Deref for FrameMsg {
+    type Target = SensorFrame;
 
-/// Pixels as base64 of their little-endian bytes: a third larger than the bytes, where a JSON
-/// number array is about three times larger.
-mod pixels_base64 {
-    use base64::Engine as _;
-    use base64::engine::general_purpose::STANDARD;
-    use serde::{Deserialize, Deserializer, Serializer, de::Error as _};
-
-    pub fn serialize<S: Serializer>(pixels: &[u16], s: S) -> Result<S::Ok, S::Error> {
-        let bytes: Vec<u8> = pixels.iter().flat_map(|v| v.to_le_bytes()).collect();
-        s.serialize_str(&STANDARD.encode(bytes))
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<u16>, D::Error> {
-        let text = String::deserialize(d)?;
-        let bytes = STANDARD.decode(text.as_bytes()).map_err(D::Error::custom)?;
-        if bytes.len() % 2 != 0 {
-            return Err(D::Error::custom("pixels: an odd number of bytes for 16-bit pixels"));
-        }
-        Ok(bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect())
-    }
-}
-
-impl From<&CameraImage> for ImageMsg {
-    fn from(i: &CameraImage) -> Self {
-        Self {
-            camera: i.camera.clone(),
-            t: i.t,
-            width: i.width,
-            height: i.height,
-            bits: i.bits,
-            pixels: i.pixels.clone(),
-            pan: i.pan,
-            tilt: i.tilt,
-        }
-    }
-}
-
-impl From<&ImageMsg> for CameraImage {
-    fn from(i: &ImageMsg) -> Self {
-        Self {
-            camera: i.camera.clone(),
-            t: i.t,
-            width: i.width,
-            height: i.height,
-            bits: i.bits,
-            pixels: i.pixels.clone(),
-            pan: i.pan,
-            tilt: i.tilt,
-        }
+    fn deref(&self) -> &SensorFrame {
+        &self.frame
     }
 }
 
 impl FrameMsg {
     /// Wraps a core frame.
     pub fn new(seq: u64, source: FrameSource, f: &SensorFrame) -> Self {
-        Self {
-            seq,
-            source,
-            t: f.t,
-            clouds: f.clouds.iter().map(CloudMsg::from).collect(),
-            imu: f.imu.iter().map(ImuMsg::from).collect(),
-            odometry: f
-                .odometry
-                .iter()
-                .map(|o| OdometryMsg { t: o.t, left_counts: o.left_counts, right_counts: o.right_counts })
-                .collect(),
-            proximity: f.proximity.raw,
-            motion_stopped: f.motion_stopped.clone(),
-            images: f.images.iter().map(ImageMsg::from).collect(),
-        }
+        Self { seq, source, frame: f.clone() }
     }
 
-    /// The core frame.
+    /// A copy of the core frame.
     pub fn frame(&self) -> SensorFrame {
-        SensorFrame {
-            t: self.t,
-            clouds: self.clouds.iter().map(PointCloud::from).collect(),
-            imu: self.imu.iter().map(ImuSample::from).collect(),
-            odometry: self
-                .odometry
-                .iter()
-                .map(|o| OdometrySample { t: o.t, left_counts: o.left_counts, right_counts: o.right_counts })
-                .collect(),
-            proximity: ProximityReading { raw: self.proximity },
-            motion_stopped: self.motion_stopped.clone(),
-            images: self.images.iter().map(CameraImage::from).collect(),
-        }
+        self.frame.clone()
     }
 
     /// The executed command, when the frame is a command's result.
@@ -610,46 +214,8 @@ impl FrameMsg {
     }
 }
 
-/// A goal: position, arrival tolerance and keep-out zones (world frame).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GoalMsg {
-    /// Position [x, y] (m).
-    pub position: [f64; 2],
-    /// Arrival tolerance (m).
-    pub tolerance: f64,
-    /// Waypoints the navigator itself visits first (the deliberative layer sends legs without).
-    pub waypoints: Vec<[f64; 2]>,
-    /// Keep-out polygons.
-    pub keep_out: Vec<Vec<[f64; 2]>>,
-}
-
-impl From<&Goal> for GoalMsg {
-    fn from(g: &Goal) -> Self {
-        let xy = |p: &Point2| [p.x, p.y];
-        Self {
-            position: xy(&g.position),
-            tolerance: g.tolerance,
-            waypoints: g.waypoints.iter().map(xy).collect(),
-            keep_out: g.keep_out.iter().map(|z| z.iter().map(xy).collect()).collect(),
-        }
-    }
-}
-
-impl GoalMsg {
-    /// The core goal.
-    pub fn goal(&self) -> Goal {
-        let pt = |p: &[f64; 2]| Point2::new(p[0], p[1]);
-        Goal {
-            position: pt(&self.position),
-            tolerance: self.tolerance,
-            waypoints: self.waypoints.iter().map(pt).collect(),
-            keep_out: self.keep_out.iter().map(|z| z.iter().map(pt).collect()).collect(),
-        }
-    }
-}
-
 /// Drive to a goal as task `task`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct DriveToMsg {
     /// Task id.
     pub task: u64,
@@ -658,14 +224,14 @@ pub struct DriveToMsg {
 }
 
 /// Stop working on a task.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct CancelMsg {
     /// Task id.
     pub task: u64,
 }
 
 /// A tooling-arm operation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ArmAction {
     /// Place an instrument on the target.
@@ -675,7 +241,7 @@ pub enum ArmAction {
 }
 
 /// Ask the tooling arm to work on a target.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ArmTaskMsg {
     /// Task id.
     pub task: u64,
@@ -686,7 +252,7 @@ pub struct ArmTaskMsg {
 }
 
 /// The execution state of a command (paper 004 section 2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TaskState {
     /// Not started yet.
@@ -723,7 +289,7 @@ impl TaskState {
 }
 
 /// A task's state as the component working on it reports it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct TaskStatusMsg {
     /// Task id.
     pub task: u64,
@@ -738,7 +304,7 @@ pub struct TaskStatusMsg {
 }
 
 /// A JAUS state command.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ControlAction {
     /// Standby -> Ready.
@@ -756,7 +322,7 @@ pub enum ControlAction {
 }
 
 /// A JAUS state command for one component or all.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct ControlMsg {
     /// Component name; `None` addresses every component.
     pub target: Option<String>,
@@ -765,7 +331,7 @@ pub struct ControlMsg {
 }
 
 /// A component's state, published on every change.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ComponentStatusMsg {
     /// Component name.
     pub component: String,
@@ -778,7 +344,7 @@ pub struct ComponentStatusMsg {
 }
 
 /// The navigator's plan (world frame, [x, y] in m).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PlanMsg {
     /// Task the plan serves.
     pub task: u64,
@@ -789,11 +355,12 @@ pub struct PlanMsg {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rovernav_bus::schema::check;
     use rovernav_bus::{decode, encode};
+    use rovernav_core::{DriveGuard, Outcome, Point2, ProximityReading};
 
-    #[test]
-    fn frames_cross_the_wire_unchanged_and_nan_survives() {
-        let frame = SensorFrame {
+    fn sample_frame() -> SensorFrame {
+        SensorFrame {
             t: 12.3,
             clouds: vec![PointCloud {
                 camera: CameraKind::BodyRear,
@@ -824,59 +391,123 @@ mod tests {
                 pan: 0.25,
                 tilt: -0.5,
             }],
-        };
-        let request = MotionRequest {
-            id: 4,
-            origin: Origin::Task(2),
-            command: CommandMsg::from(&NavCommand::Drive {
-                distance: -0.3,
-                curvature: 0.2,
-                guard: DriveGuard { proximity: true, max_tilt: Some(0.4) },
-            }),
-        };
-        let msg = FrameMsg::new(9, FrameSource::Command(request.clone()), &frame);
-        let back = decode(&topics::PLATFORM_FRAME, &encode(&topics::PLATFORM_FRAME, &msg).unwrap()).unwrap();
-        let f = back.frame();
-        assert!(f.imu[0].compass_yaw.is_nan());
-        let mut expected = frame.clone();
-        expected.imu[0].compass_yaw = 0.0;
-        let mut got = f.clone();
-        got.imu[0].compass_yaw = 0.0;
-        assert_eq!(got, expected);
-        assert_eq!(back.request(), Some(&request));
-        assert_eq!(
-            request.command.command(),
-            NavCommand::Drive {
-                distance: -0.3,
-                curvature: 0.2,
-                guard: DriveGuard { proximity: true, max_tilt: Some(0.4) },
-            }
-        );
+        }
+    }
+
+    /// Crosses the wire as the zenoh transport carries it, checking the JSON against the
+    /// topic's derived schema; NaN compares by its JSON form (`null`).
+    fn through<T: rovernav_bus::Message + JsonSchema + std::fmt::Debug>(topic: Topic<T>, msg: &T) -> T {
+        let bytes = encode(&topic, msg).unwrap();
+        let value: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+        check(&topic.schema(), &value).unwrap_or_else(|e| panic!("{}: {e}\n{value}", topic.name()));
+        let back = decode(&topic, &bytes).unwrap();
+        assert_eq!(encode(&topic, &back).unwrap(), bytes, "{}: not the same message back", topic.name());
+        back
+    }
+
+    fn plain<T: rovernav_bus::Message + JsonSchema + PartialEq + std::fmt::Debug>(msg: T) {
+        let topic: Topic<T> = Topic::new("/test/plain");
+        let back: T = through(topic, &msg);
+        assert_eq!(back, msg);
     }
 
     #[test]
-    fn every_topic_name_is_valid() {
-        use topics::*;
-        for name in [
-            PLATFORM_FRAME.name(),
-            CAMERA_IMAGE.name(),
-            PLATFORM_COMMAND.name(),
-            PLATFORM_HOLD.name(),
-            NAVIGATION_COMMAND.name(),
-            NAVIGATION_PLAN.name(),
-            EXECUTIVE_MOTION.name(),
-            EXECUTIVE_DRIVE_TO.name(),
-            EXECUTIVE_CANCEL.name(),
-            ARM_COMMAND.name(),
-            TASK_STATUS.name(),
-            LOCALIZATION_ESTIMATE.name(),
-            LOCALIZATION_RESET.name(),
-            SYSTEM_CONTROL.name(),
-            SYSTEM_STATUS.name(),
-            OPERATOR_COMMAND.name(),
-            OPERATOR_REPLY.name(),
-        ] {
+    fn every_message_crosses_the_wire_unchanged_and_fits_its_schema() {
+        let request = MotionRequest {
+            id: 4,
+            origin: Origin::Task(2),
+            command: NavCommand::Drive {
+                distance: -0.3,
+                curvature: 0.2,
+                guard: DriveGuard { proximity: true, max_tilt: Some(0.4) },
+            },
+        };
+        let frame = FrameMsg::new(9, FrameSource::Command(request.clone()), &sample_frame());
+        let back = through(topics::PLATFORM_FRAME, &frame);
+        assert!(back.imu[0].compass_yaw.is_nan(), "a faulty compass stays faulty");
+        assert_eq!(back.request(), Some(&request));
+        assert_eq!(back.images, frame.images);
+        for source in [FrameSource::Initial, FrameSource::Hold] {
+            through(topics::PLATFORM_FRAME, &FrameMsg::new(0, source, &SensorFrame::default()));
+        }
+        plain(sample_frame().images[0].clone());
+        let commands = [
+            NavCommand::Sense(vec![
+                SenseRequest::Mast { pan: 0.25 },
+                SenseRequest::MastFine { pan: 3.0 },
+                SenseRequest::BodyFront,
+                SenseRequest::BodyRear,
+                SenseRequest::Lidar { pan: -0.5 },
+                SenseRequest::Navcam { pan: 0.25, tilt: 0.75 },
+            ]),
+            NavCommand::Drive { distance: 1.0, curvature: 0.0, guard: DriveGuard::default() },
+            NavCommand::Turn { angle: -1.25 },
+            NavCommand::Finish(Outcome::HelpRequested, "stuck".into()),
+        ];
+        for (i, command) in commands.into_iter().enumerate() {
+            for origin in [Origin::Navigator, Origin::Operator, Origin::Task(7)] {
+                plain(MotionRequest { id: i as u64, origin, command: command.clone() });
+            }
+        }
+        let estimate = EstimateMsg {
+            frame_seq: 3,
+            t: 1.5,
+            pose: Pose3 { x: 1.0, y: -2.0, z: 0.3, roll: 0.01, pitch: -0.02, yaw: 3.0 },
+            covariance: [[0.1, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.3]],
+            localization_target: Some(0.7),
+        };
+        plain(estimate);
+        let unknown = EstimateMsg { covariance: [[f64::INFINITY; 3]; 3], ..estimate };
+        assert!(through(topics::LOCALIZATION_ESTIMATE, &unknown).covariance[1][2].is_nan());
+        let goal = Goal {
+            position: Point2::new(3.0, 4.0),
+            tolerance: 0.5,
+            waypoints: vec![Point2::new(1.0, 1.0)],
+            keep_out: vec![vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(0.0, 1.0)]],
+        };
+        plain(DriveToMsg { task: 1, goal });
+        plain(HoldMsg { until_s: 30.0 });
+        plain(CancelMsg { task: 2 });
+        for action in [ArmAction::PlaceInstrument, ArmAction::Scoop] {
+            plain(ArmTaskMsg { task: 3, action, target: [1.0, 2.0] });
+        }
+        for state in [TaskState::Pending, TaskState::InProcess, TaskState::Success, TaskState::Cancelled] {
+            plain(TaskStatusMsg {
+                task: 4,
+                component: "navigator".into(),
+                state,
+                outcome: Some("reached".into()),
+                message: "ok".into(),
+            });
+        }
+        for action in [ControlAction::Resume, ControlAction::EmergencyStop, ControlAction::Shutdown] {
+            plain(ControlMsg { target: Some("platform".into()), action });
+        }
+        plain(ControlMsg { target: None, action: ControlAction::Reset });
+        for state in [JausState::Initialization, JausState::Ready, JausState::Failure] {
+            plain(ComponentStatusMsg { component: "c".into(), state, message: "m".into(), time_s: 2.0 });
+        }
+        plain(PlanMsg { task: 5, points: vec![[0.0, 1.0], [2.0, 3.0]] });
+        plain(String::from("status"));
+    }
+
+    #[test]
+    fn a_wire_form_the_schema_forbids_is_caught() {
+        let bad = serde_json::json!({"id": 1, "origin": "navigator", "command": {"fly": {}}});
+        assert!(check(&topics::PLATFORM_COMMAND.schema(), &bad).is_err());
+        let value = serde_json::to_value(FrameMsg::new(0, FrameSource::Initial, &sample_frame())).unwrap();
+        let mut short = value.clone();
+        short["frame"]["proximity"] = serde_json::json!([true]);
+        assert!(check(&topics::PLATFORM_FRAME.schema(), &short).unwrap_err().contains("$.frame.proximity"));
+    }
+
+    #[test]
+    fn every_topic_name_is_valid_and_has_a_schema() {
+        let all = topics::all();
+        assert_eq!(all.len(), 17);
+        for (name, schema) in all {
             assert!(rovernav_bus::check_topic_name(name).is_ok(), "{name}");
+            assert!(schema["type"].is_string() || schema["oneOf"].is_array(), "{name}: {schema}");
         }
     }
 }

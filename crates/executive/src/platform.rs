@@ -150,7 +150,7 @@ impl SimPlatform {
 
     /// Executes one request.
     fn execute(&mut self, bus: &mut Bus, request: MotionRequest) -> Result<(), BusError> {
-        let command = request.command.command();
+        let command = request.command.clone();
         if matches!(command, NavCommand::Finish(..)) {
             return Ok(());
         }

@@ -156,7 +156,7 @@ impl NavigatorComponent {
                 .map_err(|e| ComponentFault(e.to_string()))?;
             }
             self.unused = false;
-            self.leg = Some((d.task, d.goal.goal()));
+            self.leg = Some((d.task, d.goal.clone()));
             self.leg_started = false;
         }
         for f in take_all(bus, &self.frames)? {
@@ -249,8 +249,7 @@ impl Component for NavigatorComponent {
             task_status(ctx.bus, self.name(), task, TaskState::InProcess, None, message)?;
         }
         self.next_id += 1;
-        let request =
-            MotionRequest { id: self.next_id, origin: Origin::Navigator, command: (&command).into() };
+        let request = MotionRequest { id: self.next_id, origin: Origin::Navigator, command };
         ctx.bus.publish(topics::NAVIGATION_COMMAND, request)?;
         Ok(())
     }
@@ -319,7 +318,7 @@ impl PoseEstimatorComponent {
     /// encoder streams must not have gaps.
     fn track(&mut self, bus: &mut Bus) -> Result<(), ComponentFault> {
         for pose in take_all(bus, &self.resets)? {
-            self.localizer.reset((*pose).into());
+            self.localizer.reset(*pose);
             self.publish(bus, self.last.frame_seq, self.last.t)?;
         }
         for f in take_all(bus, &self.frames)? {
@@ -334,7 +333,7 @@ impl PoseEstimatorComponent {
         self.last = EstimateMsg {
             frame_seq,
             t,
-            pose: e.pose.into(),
+            pose: e.pose,
             covariance: e.covariance,
             localization_target: self.localizer.localization_target(),
         };
@@ -425,13 +424,13 @@ impl MotionController {
 fn malformed(command: &CommandMsg) -> Option<String> {
     let finite = |v: f64| v.is_finite();
     match command {
-        CommandMsg::Drive { distance, curvature, max_tilt, .. } => {
-            (!finite(*distance) || !finite(*curvature) || max_tilt.is_some_and(|t| !finite(t)))
+        CommandMsg::Drive { distance, curvature, guard } => {
+            (!finite(*distance) || !finite(*curvature) || guard.max_tilt.is_some_and(|t| !finite(t)))
                 .then(|| format!("drive with non-finite distance {distance} or curvature {curvature}"))
         }
         CommandMsg::Turn { angle } => (!finite(*angle)).then(|| format!("turn by non-finite angle {angle}")),
-        CommandMsg::Sense { .. } => None,
-        CommandMsg::Finish { .. } => Some("`finish` is not a platform command".into()),
+        CommandMsg::Sense(_) => None,
+        CommandMsg::Finish(..) => Some("`finish` is not a platform command".into()),
     }
 }
 
@@ -538,7 +537,7 @@ mod tests {
         mc.connect(&mut bus).unwrap();
         let platform = bus.subscribe(topics::PLATFORM_COMMAND).unwrap();
         let status = bus.subscribe(topics::TASK_STATUS).unwrap();
-        let sense = CommandMsg::Sense { requests: vec![SenseMsg::BodyFront] };
+        let sense = CommandMsg::Sense(vec![SenseMsg::BodyFront]);
         let bad = CommandMsg::Turn { angle: f64::NAN };
         for (id, command) in [(1, sense.clone()), (2, bad), (3, sense)] {
             bus.publish(topics::EXECUTIVE_MOTION, MotionRequest { id, origin: Origin::Task(id), command })

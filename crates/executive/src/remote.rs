@@ -200,7 +200,7 @@ impl PlatformServer {
         let mut bus = Bus::in_process();
         platform.connect(&mut bus)?;
         let tap = bus.tap()?;
-        let truth = vec![platform.sim().truth().into()];
+        let truth = vec![platform.sim().truth()];
         let sensed = sensed_grid(&world);
         Ok(Self {
             world,
@@ -243,7 +243,7 @@ impl PlatformServer {
             scoring: None,
         };
         if let PlatformCall::Finish { goal, estimate } = &request.call {
-            reply.scoring = Some(self.score(Point2::new(goal[0], goal[1]), Pose3::from(*estimate)));
+            reply.scoring = Some(self.score(Point2::new(goal[0], goal[1]), *estimate));
             self.finished = true;
             return reply;
         }
@@ -291,7 +291,7 @@ impl PlatformServer {
                     cause: e.frame.motion_stopped.clone().unwrap_or_default(),
                 });
             }
-            self.truth.push(e.truth.into());
+            self.truth.push(e.truth);
         }
         let mut outputs = Vec::new();
         for record in self.bus.take_tap(self.tap)? {
@@ -396,7 +396,7 @@ impl RemotePlatform {
 
     /// Asks the server to score the ended mission.
     pub fn finish(&mut self, goal: Point2, estimate: Pose3) -> Result<Scoring, LinkError> {
-        let call = PlatformCall::Finish { goal: [goal.x, goal.y], estimate: estimate.into() };
+        let call = PlatformCall::Finish { goal: [goal.x, goal.y], estimate };
         let reply = self.exchange(call, self.sim_time_s, Vec::new(), Vec::new())?;
         reply.scoring.ok_or_else(|| LinkError("the simulator answered `finish` without a scoring".into()))
     }
@@ -592,7 +592,7 @@ pub fn run_remote_logged(
             scoring.cycles
         ))));
     }
-    trace.truth = scoring.truth.iter().map(|p| Pose3::from(*p)).collect();
+    trace.truth = scoring.truth.clone();
     let mut sensed = sensed_grid(&world);
     for [c, r] in &scoring.sensed {
         let (c, r) = (*c as usize, *r as usize);

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The outcome and figures of one traverse.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct Report {
     /// `reached` | `unreachable` | `help_requested` | `aborted` | `timeout`.
     pub outcome: String,
@@ -58,7 +58,7 @@ pub struct Report {
 
 /// The localiser's counters: terrain-matching fixes used and rejected, zero-velocity updates, slip
 /// corrections (issue 5: a failed or uncertain match is reported, not used).
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct LocalizationStats {
     /// Terrain matches tried.
     pub matches_attempted: u64,
@@ -91,7 +91,7 @@ impl From<rovernav_core::LocalizerStats> for LocalizationStats {
 }
 
 /// A component's final state.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct ComponentReport {
     /// Component name.
     pub name: String,
@@ -102,7 +102,7 @@ pub struct ComponentReport {
 }
 
 /// The fault that stopped the mission.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct FaultReport {
     /// `sensor_fault` | `stuck_wheel` | `localization_failure` | `no_progress` | `hazard_contact` |
     /// `component_failure`.
@@ -118,7 +118,7 @@ pub struct FaultReport {
 }
 
 /// One task of the mission plan.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct TaskReport {
     /// Plan id.
     pub id: u64,
@@ -133,7 +133,7 @@ pub struct TaskReport {
 }
 
 /// Mean wall-clock seconds per cycle spent in each stage of the loop.
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct StageTimes {
     /// The navigator's step: perception, mapping and planning (s per cycle).
     pub navigation_s: f64,
@@ -144,7 +144,7 @@ pub struct StageTimes {
 }
 
 /// One hazard contact of the true rover.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct HazardEvent {
     /// True east (m).
     pub x: f64,

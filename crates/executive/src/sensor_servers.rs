@@ -312,6 +312,7 @@ impl Component for ContactMonitor {
 mod tests {
     use super::*;
     use crate::messages::{CloudMsg, FrameSource, ImuMsg, MotionRequest, OdometryMsg, Origin, WedgeMsg};
+    use rovernav_core::{DriveGuard, SensorFrame};
 
     fn frame(seq: u64, command: Option<CommandMsg>) -> FrameMsg {
         FrameMsg {
@@ -322,14 +323,14 @@ mod tests {
                 }
                 None => FrameSource::Hold,
             },
-            t: seq as f64,
-            clouds: vec![],
-            imu: vec![],
-            odometry: vec![],
-            proximity: [false; 10],
-            motion_stopped: None,
-            images: vec![],
+            frame: SensorFrame { t: seq as f64, ..Default::default() },
         }
+    }
+
+    /// A frame with its sensor data edited.
+    fn edited(mut f: FrameMsg, edit: impl FnOnce(&mut SensorFrame)) -> FrameMsg {
+        edit(&mut f.frame);
+        f
     }
 
     fn cloud(camera: CameraMsg, points: usize) -> CloudMsg {
@@ -355,14 +356,13 @@ mod tests {
     }
 
     fn sense(seq: u64, clouds: Vec<CloudMsg>) -> FrameMsg {
-        FrameMsg { clouds, ..frame(seq, Some(CommandMsg::Sense { requests: vec![] })) }
+        edited(frame(seq, Some(CommandMsg::Sense(vec![]))), |f| f.clouds = clouds)
     }
 
     #[test]
     fn the_contact_monitor_fails_at_the_limit_and_ignores_other_stops() {
-        let stopped = |seq: u64, why: &str| FrameMsg {
-            motion_stopped: Some(why.into()),
-            ..frame(seq, Some(CommandMsg::Turn { angle: 0.1 }))
+        let stopped = |seq: u64, why: &str| {
+            edited(frame(seq, Some(CommandMsg::Turn { angle: 0.1 })), |f| f.motion_stopped = Some(why.into()))
         };
         let two = vec![
             stopped(1, "hazard: belly contact, terrain 0.190 m above the wheel plane"),
@@ -411,10 +411,10 @@ mod tests {
             compass_yaw: compass,
             sun_yaw: None,
         };
-        let ok = FrameMsg { imu: vec![imu(0.3, 0.01)], ..frame(1, None) };
+        let ok = edited(frame(1, None), |f| f.imu = vec![imu(0.3, 0.01)]);
         assert_eq!(feed(&mut InertialSensors::new(), vec![ok]), None);
         for (bad, name) in [(imu(f64::NAN, 0.0), "compass"), (imu(0.2, f64::INFINITY), "gyro")] {
-            let why = feed(&mut InertialSensors::new(), vec![FrameMsg { imu: vec![bad], ..frame(1, None) }])
+            let why = feed(&mut InertialSensors::new(), vec![edited(frame(1, None), |f| f.imu = vec![bad])])
                 .unwrap();
             assert!(why.contains(name), "{why}");
         }
@@ -423,13 +423,12 @@ mod tests {
     /// A frame of a command with encoder counts at its end.
     fn moved(seq: u64, command: CommandMsg, left: i64, right: i64) -> FrameMsg {
         let odometry = vec![OdometryMsg { t: seq as f64, left_counts: left, right_counts: right }];
-        FrameMsg { odometry, ..frame(seq, Some(command)) }
+        edited(frame(seq, Some(command)), |f| f.odometry = odometry)
     }
 
     #[test]
     fn one_side_still_while_the_other_turns_is_a_stuck_wheel() {
-        let drive =
-            CommandMsg::Drive { distance: 1.0, curvature: 0.0, proximity_guard: false, max_tilt: None };
+        let drive = CommandMsg::Drive { distance: 1.0, curvature: 0.0, guard: DriveGuard::default() };
         let server = || WheelOdometry::new(20.0, 0.5);
         // 2000 counts per metre: both sides turning, then both stopping early (a hazard) are fine.
         let normal = vec![moved(1, drive.clone(), 2000, 2000), moved(2, drive.clone(), 2100, 2100)];
@@ -445,10 +444,9 @@ mod tests {
         let stuck = vec![moved(1, turn.clone(), 0, 0), moved(2, turn, -250, 0)];
         assert!(feed(&mut server(), stuck).unwrap().contains("right wheels"));
         // The motor-current monitor's stall report is enough by itself.
-        let report = FrameMsg {
-            motion_stopped: Some("stall: left wheels not turning".into()),
-            ..moved(1, drive, 0, 0)
-        };
+        let report = edited(moved(1, drive, 0, 0), |f| {
+            f.motion_stopped = Some("stall: left wheels not turning".into())
+        });
         assert!(feed(&mut server(), vec![report]).unwrap().contains("motor current"));
     }
 }

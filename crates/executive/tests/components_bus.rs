@@ -226,7 +226,7 @@ fn states(rt: &Runtime) -> Vec<JausState> {
 }
 
 fn drive(rt: &mut Runtime, id: u64) {
-    let command = CommandMsg::Drive { distance: 0.5, curvature: 0.0, proximity_guard: false, max_tilt: None };
+    let command = CommandMsg::Drive { distance: 0.5, curvature: 0.0, guard: Default::default() };
     rt.bus()
         .publish(topics::EXECUTIVE_MOTION, MotionRequest { id, origin: Origin::Operator, command })
         .unwrap();

@@ -66,9 +66,7 @@ fn run_logging(mission_text: &str, localizer: &str) -> (Value, Vec<(f64, usize)>
 fn fine_pans(v: &Value, out: &mut Vec<f64>) {
     match v {
         Value::Object(o) => {
-            if o.get("sensor").and_then(Value::as_str) == Some("mast_fine") {
-                out.extend(o.get("pan").and_then(Value::as_f64));
-            }
+            out.extend(o.get("mast_fine").and_then(|r| r["pan"].as_f64()));
             o.values().for_each(|x| fine_pans(x, out));
         }
         Value::Array(a) => a.iter().for_each(|x| fine_pans(x, out)),

@@ -133,7 +133,7 @@ fn a_run_that_ends_on_a_fault_loses_nothing_from_its_log() {
     let report = check_log_and_replay(&out);
     assert!(!report["fault"].is_null(), "the run ended on the fault: {report}");
     let log = rovernav_telemetry::read_log(&out.join("telemetry.mcap")).unwrap();
-    let nan_compass = log.frames.iter().flat_map(|f| &f.imu).filter(|s| s.compass_yaw.is_none()).count();
+    let nan_compass = log.frames.iter().flat_map(|f| &f.frame.imu).filter(|s| s.compass_yaw.is_nan()).count();
     assert!(nan_compass > 0, "the faulty compass readings are logged (as null)");
     let _ = std::fs::remove_dir_all(out.parent().unwrap());
 }

@@ -1,7 +1,8 @@
 //! Telemetry: every topic of a run logged to an MCAP file (the log format of ROS 2 and
 //! Foxglove), and the reader that rebuilds the run from the log alone.
 //!
-//! - [`TelemetryWriter`]: a generic MCAP writer (JSON messages with JSON Schemas, lz4 chunks,
+//! - [`TelemetryWriter`]: a generic MCAP writer (JSON messages with JSON Schemas derived from
+//!   the message types, lz4 chunks,
 //!   a flush policy so a killed process loses at most about a second).
 //! - [`TelemetryRecorder`]: a `RunObserver` that logs the world, settings, sensor frames,
 //!   commands, plans, estimates, truth, hazard contacts, overlays and the report
@@ -18,12 +19,14 @@ pub mod base64;
 pub mod messages;
 pub mod reader;
 pub mod recorder;
-pub mod schema;
 pub mod writer;
 
 /// The MCAP library the log is written with, for callers that want its raw records or its
 /// reader (the tests read logs with it, independently of [`read_log`]).
 pub use mcap;
+pub use messages::topic_table;
 pub use reader::{LogEnd, LoggedRun, ReplayedRun, parse_log, read_log};
-pub use recorder::{TelemetryRecorder, topic_table};
+pub use recorder::TelemetryRecorder;
+/// The derived JSON Schemas and their checker (the bus crate's, shared by the log).
+pub use rovernav_bus::schema;
 pub use writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};

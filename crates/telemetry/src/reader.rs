@@ -186,32 +186,22 @@ impl LoggedRun {
         let truths = self.per_cycle(&self.truths, |m| m.cycle, topics::TRUTH, upto)?;
         let estimates = self.per_cycle(&self.estimates, |m| m.cycle, topics::ESTIMATE, upto)?;
         let frames = self.per_cycle(&self.frames, |m| m.cycle, topics::SENSOR_FRAME, upto)?;
-        let truth: Vec<Pose3> = truths.iter().map(|m| (&m.pose).into()).collect();
+        let truth: Vec<Pose3> = truths.iter().map(|m| m.pose).collect();
         let mut sensed = Grid2::filled(sensed_geometry(world), false);
         // The loop marks the clouds of executed commands only, placed with the true pose.
         for (frame, pose) in frames.iter().zip(&truth).skip(1) {
-            let frame = frame.to_frame().map_err(|e| {
-                self.content_err(format!("topic `{}` cycle {}: {e}", topics::SENSOR_FRAME, frame.cycle))
-            })?;
-            for cloud in &frame.clouds {
+            for cloud in &frame.frame.clouds {
                 mark_sensed(&mut sensed, pose, cloud);
             }
         }
         let overlays = match (&self.overlays, &self.report) {
-            (Some(o), Some(_)) => {
-                o.to_overlays().map_err(|e| self.content_err(format!("topic `{}`: {e}", topics::OVERLAYS)))?
-            }
+            (Some(o), Some(_)) => o.overlays.clone(),
             _ => Vec::new(),
         };
         Ok(Trace {
             truth,
-            estimate: estimates.iter().map(|m| (&m.pose).into()).collect(),
-            plans: self
-                .plans
-                .iter()
-                .filter(|p| p.cycle <= upto)
-                .map(|p| p.points.iter().map(|&q| q.into()).collect())
-                .collect(),
+            estimate: estimates.iter().map(|m| m.estimate.pose).collect(),
+            plans: self.plans.iter().filter(|p| p.cycle <= upto).map(|p| p.points.clone()).collect(),
             overlays,
             sensed: Some(sensed),
         })
@@ -263,7 +253,7 @@ impl LoggedRun {
             sim_time_s: last.sim_time_s,
             wall_time_s: last.wall_time_s,
             cycles: last.cycle,
-            sensing_actions: frames.iter().skip(1).map(|f| f.clouds.len() as u64).sum(),
+            sensing_actions: frames.iter().skip(1).map(|f| f.frame.clouds.len() as u64).sum(),
             localization_error_m: (truth.x - estimate.x).hypot(truth.y - estimate.y),
             navigator: settings.navigator.clone(),
             localizer: settings.localizer.clone(),

@@ -2,14 +2,13 @@
 
 use crate::messages::{
     CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, RawImageMsg, SensorFrameMsg,
-    SettingsMsg, TruthMsg, WorldMsg, camera_topic, report_schema, topics,
+    SettingsMsg, TruthMsg, WorldMsg, camera_topic, topic_table, topics,
 };
 use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
 use rovernav_bus::Record;
 use rovernav_core::{Point2, Pose3, PoseEstimate, SensorFrame};
 use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
 use serde::Serialize;
-use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
@@ -21,23 +20,6 @@ use std::time::{Duration, Instant};
 /// Prefix under which every message of the component bus is logged as published (`/bus/platform/frame`),
 /// beside the curated topics above that replay reads.
 pub const BUS_PREFIX: &str = "/bus";
-
-/// Every topic with its schema name, schema and whether it carries simulation truth.
-pub fn topic_table() -> Vec<(&'static str, &'static str, Value, bool)> {
-    vec![
-        (topics::WORLD, "rovernav.World", WorldMsg::schema(), true),
-        (topics::SETTINGS, "rovernav.RunSettings", SettingsMsg::schema(), false),
-        (topics::SENSOR_FRAME, "rovernav.SensorFrame", SensorFrameMsg::schema(), false),
-        (topics::ESTIMATE, "rovernav.PoseEstimate", EstimateMsg::schema(), false),
-        (topics::TRUTH, "rovernav.Truth", TruthMsg::schema(), true),
-        (topics::CYCLE, "rovernav.Cycle", CycleMsg::schema(), false),
-        (topics::COMMAND, "rovernav.NavCommand", CommandMsg::schema(), false),
-        (topics::PLAN, "rovernav.Plan", PlanMsg::schema(), false),
-        (topics::HAZARD_CONTACTS, "rovernav.HazardContact", HazardContactMsg::schema(), true),
-        (topics::OVERLAYS, "rovernav.Overlays", OverlaysMsg::schema(), false),
-        (topics::REPORT, "rovernav.Report", report_schema(), false),
-    ]
-}
 
 /// The writer and the first error, shared with the flusher thread.
 struct Shared<W: Write + Seek> {
@@ -77,6 +59,8 @@ pub struct TelemetryRecorder<W: Write + Seek + Send + 'static = BufWriter<File>>
     last_plan: Option<Vec<Point2>>,
     plans_logged: usize,
     last_hazards: u32,
+    /// The derived schema of each bus topic of the stack.
+    bus_schemas: BTreeMap<&'static str, serde_json::Value>,
 }
 
 impl TelemetryRecorder<BufWriter<File>> {
@@ -117,6 +101,7 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
             last_plan: None,
             plans_logged: 0,
             last_hazards: 0,
+            bus_schemas: rovernav_executive::messages::topics::all().into_iter().collect(),
         })
     }
 
@@ -156,11 +141,7 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
         if plan.is_empty() || self.last_plan.as_deref() == Some(plan) {
             return;
         }
-        self.put(
-            topics::PLAN,
-            t,
-            &PlanMsg { cycle, sim_time_s, points: plan.iter().map(|&p| p.into()).collect() },
-        );
+        self.put(topics::PLAN, t, &PlanMsg { cycle, sim_time_s, points: plan.to_vec() });
         self.last_plan = Some(plan.to_vec());
         self.plans_logged += 1;
     }
@@ -222,7 +203,7 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             simulation_truth: true,
             cycle: 0,
             sim_time_s: frame.t,
-            pose: (&initial_truth(world)).into(),
+            pose: initial_truth(world),
             hazard_contacts: 0,
         };
         self.put(topics::TRUTH, t, &truth);
@@ -241,7 +222,7 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             simulation_truth: true,
             cycle: r.cycle,
             sim_time_s: r.sim_time_s,
-            pose: r.truth.into(),
+            pose: *r.truth,
             hazard_contacts: r.hazard_contacts,
         };
         self.put(topics::TRUTH, t, &truth);
@@ -272,13 +253,18 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
         for record in records {
             let topic = format!("{BUS_PREFIX}{}", record.topic);
             let t = self.stamp(record.time_s);
+            let bus_schemas = &self.bus_schemas;
             lock(&self.shared).apply(|w| {
                 if !w.has_topic(&topic) {
-                    // Bus messages are serde mirrors of the core types; their schema is the
-                    // type's name, the payload plain JSON.
+                    // The stack's topics carry the message types' derived schemas; a topic
+                    // outside that table (a test's, a remote link's) is plain JSON.
                     let metadata = BTreeMap::from([("bus_topic".to_string(), record.topic.clone())]);
                     let name = if record.type_name.is_empty() { "json" } else { &record.type_name };
-                    w.add_topic(&topic, name, &serde_json::json!({}), &metadata)?;
+                    let schema = bus_schemas
+                        .get(record.topic.as_str())
+                        .cloned()
+                        .unwrap_or_else(|| serde_json::json!({}));
+                    w.add_topic(&topic, name, &schema, &metadata)?;
                 }
                 w.write_json(&topic, t, &record.payload)
             });
@@ -292,7 +278,11 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
         for plan in unlogged {
             self.put_plan(report.cycles, report.sim_time_s, t, &plan);
         }
-        self.put(topics::OVERLAYS, t, &OverlaysMsg::of(report.sim_time_s, &trace.overlays));
+        self.put(
+            topics::OVERLAYS,
+            t,
+            &OverlaysMsg { sim_time_s: report.sim_time_s, overlays: trace.overlays.clone() },
+        );
         self.put(topics::REPORT, t, report);
         lock(&self.shared).apply(|w| w.flush());
     }

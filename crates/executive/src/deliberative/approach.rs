@@ -17,8 +17,8 @@
 
 use super::{Deliberative, Role, TaskKind};
 use crate::messages::{
-    CommandMsg, DriveToMsg, FrameMsg, GoalMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState,
-    TaskStatusMsg, topics,
+    CommandMsg, DriveToMsg, FrameMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState, TaskStatusMsg,
+    topics,
 };
 use rovernav_bus::{Bus, BusError};
 use rovernav_core::{Goal, Point2, Pose3};
@@ -123,7 +123,7 @@ impl Deliberative {
         let request = MotionRequest {
             id: cmd,
             origin: Origin::Task(cmd),
-            command: CommandMsg::Sense { requests: vec![SenseMsg::Navcam { pan, tilt }] },
+            command: CommandMsg::Sense(vec![SenseMsg::Navcam { pan, tilt }]),
         };
         bus.publish(topics::EXECUTIVE_MOTION, request)
     }
@@ -230,10 +230,7 @@ impl Deliberative {
                                 waypoints: Vec::new(),
                                 keep_out: self.config.keep_out.clone(),
                             };
-                            bus.publish(
-                                topics::EXECUTIVE_DRIVE_TO,
-                                DriveToMsg { task: cmd, goal: GoalMsg::from(&goal) },
-                            )
+                            bus.publish(topics::EXECUTIVE_DRIVE_TO, DriveToMsg { task: cmd, goal })
                         } else if turn_rad != 0.0 {
                             run.phase = Phase::Turning { distance: distance_m };
                             self.motion(bus, i, cmd, CommandMsg::Turn { angle: turn_rad })
@@ -288,7 +285,7 @@ impl Deliberative {
 }
 
 fn drive(distance: f64) -> CommandMsg {
-    CommandMsg::Drive { distance, curvature: 0.0, proximity_guard: false, max_tilt: None }
+    CommandMsg::Drive { distance, curvature: 0.0, guard: Default::default() }
 }
 
 fn pose_of(p: &crate::messages::PoseMsg) -> Pose3 {

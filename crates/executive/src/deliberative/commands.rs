@@ -5,7 +5,7 @@ use super::{Deliberative, MissionState, Role, TaskKind};
 use crate::command_language::{OperatorCommand, help_text, parse_command};
 use crate::messages::{CommandMsg, ControlAction, MotionRequest, Origin, PoseMsg, TaskState, topics};
 use rovernav_bus::{Bus, BusError};
-use rovernav_core::{Outcome, Point2};
+use rovernav_core::{DriveGuard, Outcome, Point2};
 
 impl Deliberative {
     /// Parses and applies one operator line; returns the answer.
@@ -57,8 +57,7 @@ impl Deliberative {
                 CommandMsg::Drive {
                     distance,
                     curvature: 0.0,
-                    proximity_guard: distance > 0.0,
-                    max_tilt: None,
+                    guard: DriveGuard { proximity: distance > 0.0, max_tilt: None },
                 },
             )?,
             C::Turn { angle } => self.direct(bus, cmd.clone(), CommandMsg::Turn { angle })?,

@@ -3,8 +3,8 @@
 
 use super::{Deliberative, TaskKind};
 use crate::messages::{
-    ArmAction, ArmTaskMsg, CancelMsg, CommandMsg, DriveToMsg, GoalMsg, MotionRequest, Origin, SenseMsg,
-    TaskState, topics,
+    ArmAction, ArmTaskMsg, CancelMsg, CommandMsg, DriveToMsg, MotionRequest, Origin, SenseMsg, TaskState,
+    topics,
 };
 use rovernav_bus::{Bus, BusError};
 use rovernav_core::{Goal, Point2, angle_diff, wrap_angle};
@@ -35,10 +35,7 @@ impl Deliberative {
                     waypoints: Vec::new(),
                     keep_out: self.config.keep_out.clone(),
                 };
-                bus.publish(
-                    topics::EXECUTIVE_DRIVE_TO,
-                    DriveToMsg { task: cmd, goal: GoalMsg::from(&goal) },
-                )?;
+                bus.publish(topics::EXECUTIVE_DRIVE_TO, DriveToMsg { task: cmd, goal })?;
             }
             TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => return self.start_watch(bus, i, cmd),
             TaskKind::Panorama => {
@@ -50,7 +47,7 @@ impl Deliberative {
                 let request = MotionRequest {
                     id: cmd,
                     origin: Origin::Task(cmd),
-                    command: CommandMsg::Sense { requests },
+                    command: CommandMsg::Sense(requests),
                 };
                 bus.publish(topics::EXECUTIVE_MOTION, request)?;
             }
@@ -71,7 +68,7 @@ impl Deliberative {
                 let request = MotionRequest {
                     id: cmd,
                     origin: Origin::Task(cmd),
-                    command: CommandMsg::Sense { requests: vec![SenseMsg::Mast { pan }] },
+                    command: CommandMsg::Sense(vec![SenseMsg::Mast { pan }]),
                 };
                 bus.publish(topics::EXECUTIVE_MOTION, request)?;
             }

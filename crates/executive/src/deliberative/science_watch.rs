@@ -259,9 +259,7 @@ impl Deliberative {
         let request = MotionRequest {
             id: cmd,
             origin: Origin::Task(cmd),
-            command: CommandMsg::Sense {
-                requests: vec![SenseMsg::Navcam { pan: spec.pan, tilt: spec.tilt }],
-            },
+            command: CommandMsg::Sense(vec![SenseMsg::Navcam { pan: spec.pan, tilt: spec.tilt }]),
         };
         bus.publish(topics::EXECUTIVE_MOTION, request)
     }

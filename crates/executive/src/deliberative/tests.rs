@@ -75,7 +75,7 @@ fn drives_are_presented_one_after_the_other_and_parallel_tasks_together() {
     dl.step(&mut bus).unwrap();
     let first = bus.take(&drive_to).unwrap();
     assert_eq!(first.len(), 1);
-    assert_eq!(first[0].goal.position, [5.0, 5.0], "the waypoint comes first");
+    assert_eq!(first[0].goal.position, Point2::new(5.0, 5.0), "the waypoint comes first");
     // Nothing new while the waypoint drive is in process.
     status(&mut bus, first[0].task, TaskState::InProcess, None);
     dl.step(&mut bus).unwrap();
@@ -83,7 +83,7 @@ fn drives_are_presented_one_after_the_other_and_parallel_tasks_together() {
     status(&mut bus, first[0].task, TaskState::Success, Some("reached"));
     dl.step(&mut bus).unwrap();
     let second = bus.take(&drive_to).unwrap();
-    assert_eq!(second[0].goal.position, [10.0, 0.0]);
+    assert_eq!(second[0].goal.position, Point2::new(10.0, 0.0));
     assert!(bus.take(&motion).unwrap().is_empty(), "the panorama waits for the goal");
     status(&mut bus, second[0].task, TaskState::Success, Some("reached"));
     let at_goal = EstimateMsg { pose: PoseMsg { x: 10.0, ..Default::default() }, ..Default::default() };
@@ -166,7 +166,7 @@ fn stale_statuses_of_withdrawn_commands_are_ignored() {
     assert_eq!(bus.take(&cancel).unwrap()[0].task, old);
     dl.step(&mut bus).unwrap();
     let goal = bus.take(&drive_to).unwrap();
-    assert_eq!(goal[0].goal.position, [10.0, 0.0]);
+    assert_eq!(goal[0].goal.position, Point2::new(10.0, 0.0));
     // The navigator confirms the cancel of the old command afterwards: no effect on the goal.
     status(&mut bus, old, TaskState::Cancelled, None);
     dl.step(&mut bus).unwrap();

@@ -5,8 +5,9 @@
 //! shifted to the top of the 16 bits, which is how a 16-bit viewer expects the full scale.
 
 use crate::base64;
-use crate::schema::{bytes, integer, message, object, string};
+use rovernav_bus::schema::titled_schema_of;
 use rovernav_core::CameraImage;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -16,7 +17,7 @@ pub fn camera_topic(camera: &str) -> String {
 }
 
 /// A time as Foxglove's schemas write it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct TimeMsg {
     /// Whole seconds.
     pub sec: u32,
@@ -25,7 +26,7 @@ pub struct TimeMsg {
 }
 
 /// `foxglove.RawImage`: one uncompressed image.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct RawImageMsg {
     /// Time of exposure (simulation time).
     pub timestamp: TimeMsg,
@@ -40,6 +41,7 @@ pub struct RawImageMsg {
     /// Bytes per row.
     pub step: u32,
     /// Pixel bytes, base64.
+    #[schemars(extend("contentEncoding" = "base64"))]
     pub data: String,
 }
 
@@ -82,34 +84,17 @@ impl RawImageMsg {
         Ok(raw.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect())
     }
 
-    /// The JSON Schema (Foxglove's `foxglove.RawImage` fields).
+    /// The JSON Schema, derived, under Foxglove's well-known name `foxglove.RawImage` (the
+    /// fields are Foxglove's, so its Image panel shows the channel natively).
     pub fn schema() -> Value {
-        message(
-            "foxglove.RawImage",
-            "A raw image",
-            &[
-                (
-                    "timestamp",
-                    object(
-                        "Timestamp of image",
-                        &[("sec", integer("seconds")), ("nsec", integer("nanoseconds"))],
-                    ),
-                ),
-                ("frame_id", string("Frame of reference for the image")),
-                ("width", integer("Image width")),
-                ("height", integer("Image height")),
-                ("encoding", string("Encoding of the raw image data")),
-                ("step", integer("Byte length of a single row")),
-                ("data", bytes("Raw image data")),
-            ],
-        )
+        titled_schema_of::<Self>("foxglove.RawImage")
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::schema::check;
+    use rovernav_bus::schema::check;
 
     #[test]
     fn twelve_bit_images_round_trip_at_full_scale_and_match_the_schema() {

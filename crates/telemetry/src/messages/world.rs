@@ -1,36 +1,20 @@
 //! `/sim/world`: the simulated world of a run, complete enough to rebuild it bit for bit.
 
-use super::{Point2Msg, Pose2Msg, point_schema, points_schema, pose2_schema};
 use crate::base64;
-use crate::schema::{
-    array, boolean, bytes, enumeration, fixed_array, integer, message, nullable, number, object, string,
-};
 use rovernav_core::{Goal, GridGeometry, Pose2, RoverConfig};
 use rovernav_executive::World;
 use rovernav_sim::{
     LidarModel, ProximityModel, RangeImagerModel, RangeSource, SensorModel, SlipModel, StereoImaging,
 };
 use rovernav_terrain::{Dem, GeoReference, Rock, Terrain};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 /// Placement of a grid (row 0 south, column 0 west).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GridMsg {
-    /// Columns (along x).
-    pub cols: u64,
-    /// Rows (along y).
-    pub rows: u64,
-    /// Cell size (m).
-    pub resolution: f64,
-    /// World x of the western edge (m).
-    pub origin_x: f64,
-    /// World y of the southern edge (m).
-    pub origin_y: f64,
-}
+pub type GridMsg = GridGeometry;
 
 /// A rock body on the terrain.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct RockMsg {
     /// Centre east (m).
     pub x: f64,
@@ -43,7 +27,7 @@ pub struct RockMsg {
 }
 
 /// The true terrain: elevation grid and rocks.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct TerrainMsg {
     /// Grid placement.
     pub grid: GridMsg,
@@ -61,43 +45,11 @@ pub struct TerrainMsg {
     pub rocks: Vec<RockMsg>,
 }
 
-/// The rover's physical and sensing parameters (`RoverConfig`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RoverMsg {
-    /// Body length (m).
-    pub length: f64,
-    /// Body width (m).
-    pub width: f64,
-    /// Wheel track (m).
-    pub track: f64,
-    /// Belly clearance (m).
-    pub clearance: f64,
-    /// Hazardous tilt (rad).
-    pub max_tilt: f64,
-    /// Top speed (m/s).
-    pub max_speed: f64,
-    /// In-place turn rate (rad/s).
-    pub turn_rate: f64,
-    /// Encoder counts per cm of wheel travel.
-    pub encoder_counts_per_cm: f64,
-    /// Mast camera height (m).
-    pub mast_height: f64,
-    /// Mast field of view (rad).
-    pub mast_fov: f64,
-    /// Mast useful range (m).
-    pub mast_range: f64,
-    /// Body camera height (m).
-    pub body_camera_height: f64,
-    /// Body field of view (rad).
-    pub body_fov: f64,
-    /// Body useful range (m).
-    pub body_range: f64,
-    /// Proximity sensor range (m).
-    pub proximity_range: f64,
-}
+/// The rover's physical and sensing parameters.
+pub type RoverMsg = RoverConfig;
 
 /// One range imager's ray grid and noise.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ImagerMsg {
     /// Rays across.
     pub cols: u64,
@@ -118,7 +70,7 @@ pub struct ImagerMsg {
 }
 
 /// The nodding LIDAR.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct LidarMsg {
     /// Ray grid and noise.
     pub imager: ImagerMsg,
@@ -133,7 +85,7 @@ pub struct LidarMsg {
 }
 
 /// The proximity threshold sensors.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ProximityModelMsg {
     /// Mounting height (m).
     pub height: f64,
@@ -150,7 +102,7 @@ pub struct ProximityModelMsg {
 }
 
 /// Wheel slip.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SlipMsg {
     /// Level-ground slip ratio.
     pub base: f64,
@@ -169,7 +121,7 @@ pub struct SlipMsg {
 }
 
 /// Every noise and mounting parameter of the simulated platform (`SensorModel`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SensorModelMsg {
     /// Mast stereo.
     pub mast: ImagerMsg,
@@ -208,20 +160,10 @@ pub struct SensorModelMsg {
 }
 
 /// Goal, waypoints and keep-out zones.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GoalMsg {
-    /// Goal position.
-    pub position: Point2Msg,
-    /// Reach tolerance (m).
-    pub tolerance: f64,
-    /// Waypoints in order.
-    pub waypoints: Vec<Point2Msg>,
-    /// Keep-out polygons.
-    pub keep_out: Vec<Vec<Point2Msg>>,
-}
+pub type GoalMsg = Goal;
 
 /// `/sim/world`: everything needed to rebuild the run's world and draw it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct WorldMsg {
     /// Always true: this is the simulator's ground truth, never shown to the autonomy.
     pub simulation_truth: bool,
@@ -232,7 +174,7 @@ pub struct WorldMsg {
     /// The sensor models.
     pub sensor_model: SensorModelMsg,
     /// True start pose.
-    pub start: Pose2Msg,
+    pub start: Pose2,
     /// The goal.
     pub goal: GoalMsg,
 }
@@ -277,13 +219,7 @@ impl WorldMsg {
         Self {
             simulation_truth: true,
             terrain: TerrainMsg {
-                grid: GridMsg {
-                    cols: g.cols as u64,
-                    rows: g.rows as u64,
-                    resolution: g.resolution,
-                    origin_x: g.origin_x,
-                    origin_y: g.origin_y,
-                },
+                grid: *g,
                 heights_f32le: base64::encode_f32s(dem.heights.data.iter().copied()),
                 nodata: dem.nodata,
                 crs: dem.geo.crs.clone(),
@@ -296,23 +232,7 @@ impl WorldMsg {
                     .map(|k| RockMsg { x: k.x, y: k.y, diameter: k.diameter, height: k.height })
                     .collect(),
             },
-            rover: RoverMsg {
-                length: r.length,
-                width: r.width,
-                track: r.track,
-                clearance: r.clearance,
-                max_tilt: r.max_tilt,
-                max_speed: r.max_speed,
-                turn_rate: r.turn_rate,
-                encoder_counts_per_cm: r.encoder_counts_per_cm,
-                mast_height: r.mast_height,
-                mast_fov: r.mast_fov,
-                mast_range: r.mast_range,
-                body_camera_height: r.body_camera_height,
-                body_fov: r.body_fov,
-                body_range: r.body_range,
-                proximity_range: r.proximity_range,
-            },
+            rover: r.clone(),
             sensor_model: SensorModelMsg {
                 mast: imager_msg(&s.mast),
                 mast_fine: Some(imager_msg(&s.mast_fine)),
@@ -358,26 +278,15 @@ impl WorldMsg {
                     .into(),
                 ),
             },
-            start: Pose2Msg { x: world.start.x, y: world.start.y, yaw: world.start.yaw },
-            goal: GoalMsg {
-                position: world.goal.position.into(),
-                tolerance: world.goal.tolerance,
-                waypoints: world.goal.waypoints.iter().map(|&p| p.into()).collect(),
-                keep_out: world.goal.keep_out.iter().map(|z| z.iter().map(|&p| p.into()).collect()).collect(),
-            },
+            start: world.start,
+            goal: world.goal.clone(),
         }
     }
 
     /// Rebuilds the world; the error names the field that does not fit.
     pub fn to_world(&self) -> Result<World, String> {
         let t = &self.terrain;
-        let geometry = GridGeometry {
-            cols: t.grid.cols as usize,
-            rows: t.grid.rows as usize,
-            resolution: t.grid.resolution,
-            origin_x: t.grid.origin_x,
-            origin_y: t.grid.origin_y,
-        };
+        let geometry = t.grid;
         let heights = base64::decode_f32s(&t.heights_f32le)
             .map_err(|e| format!("field `terrain.heights_f32le`: {e}"))?;
         if heights.len() != geometry.len() || geometry.is_empty() {
@@ -394,7 +303,6 @@ impl WorldMsg {
                 geometry.resolution
             ));
         }
-        let r = &self.rover;
         let s = &self.sensor_model;
         let p = &s.proximity;
         Ok(World {
@@ -410,23 +318,7 @@ impl WorldMsg {
                     .map(|k| Rock { x: k.x, y: k.y, diameter: k.diameter, height: k.height })
                     .collect(),
             },
-            rover: RoverConfig {
-                length: r.length,
-                width: r.width,
-                track: r.track,
-                clearance: r.clearance,
-                max_tilt: r.max_tilt,
-                max_speed: r.max_speed,
-                turn_rate: r.turn_rate,
-                encoder_counts_per_cm: r.encoder_counts_per_cm,
-                mast_height: r.mast_height,
-                mast_fov: r.mast_fov,
-                mast_range: r.mast_range,
-                body_camera_height: r.body_camera_height,
-                body_fov: r.body_fov,
-                body_range: r.body_range,
-                proximity_range: r.proximity_range,
-            },
+            rover: self.rover.clone(),
             sensor_model: SensorModel {
                 mast: imager_model(&s.mast),
                 mast_fine: s
@@ -481,191 +373,9 @@ impl WorldMsg {
                 // The pictures are logged themselves (`/camera/*`); their settings take the defaults.
                 navcam: rovernav_sim::NavcamImaging::default(),
             },
-            start: Pose2::new(self.start.x, self.start.y, self.start.yaw),
-            goal: Goal {
-                position: self.goal.position.into(),
-                tolerance: self.goal.tolerance,
-                waypoints: self.goal.waypoints.iter().map(|&p| p.into()).collect(),
-                keep_out: self.goal.keep_out.iter().map(|z| z.iter().map(|&p| p.into()).collect()).collect(),
-            },
+            start: self.start,
+            goal: self.goal.clone(),
         })
-    }
-
-    /// The JSON Schema.
-    pub fn schema() -> Value {
-        let imager = || {
-            object(
-                "range imager ray grid and noise",
-                &[
-                    ("cols", integer("rays across")),
-                    ("rows", integer("rays down")),
-                    ("near_range", number("ground range of the bottom row (m)")),
-                    ("up_margin", number("elevation margin of the top row (rad)")),
-                    ("sigma_constant", number("constant range error sigma (m)")),
-                    ("sigma_quadratic", number("range error sigma per squared metre (1/m)")),
-                    ("dropout", number("ray dropout probability")),
-                    ("capture_time", number("capture time (s)")),
-                ],
-            )
-        };
-        message(
-            "rovernav.World",
-            "The simulated world of a run (simulation truth: the autonomy never sees it)",
-            &[
-                ("simulation_truth", boolean("always true: ground truth, logged for scoring and pictures")),
-                (
-                    "terrain",
-                    object(
-                        "true terrain",
-                        &[
-                            (
-                                "grid",
-                                object(
-                                    "elevation grid placement (row 0 south, column 0 west)",
-                                    &[
-                                        ("cols", integer("columns (along x)")),
-                                        ("rows", integer("rows (along y)")),
-                                        ("resolution", number("cell size (m)")),
-                                        ("origin_x", number("world x of the western edge (m)")),
-                                        ("origin_y", number("world y of the southern edge (m)")),
-                                    ],
-                                ),
-                            ),
-                            (
-                                "heights_f32le",
-                                bytes(
-                                    "heights (m), little-endian f32, row-major from the south-west, NaN = no data",
-                                ),
-                            ),
-                            ("nodata", nullable(number("the source file's nodata value"))),
-                            ("crs", string("coordinate reference system of the projected frame")),
-                            ("easting", number("projected easting of local (0, 0) (m)")),
-                            ("northing", number("projected northing of local (0, 0) (m)")),
-                            (
-                                "rocks",
-                                array(
-                                    "rock bodies",
-                                    object(
-                                        "rock",
-                                        &[
-                                            ("x", number("centre east (m)")),
-                                            ("y", number("centre north (m)")),
-                                            ("diameter", number("diameter (m)")),
-                                            ("height", number("height above the ground (m)")),
-                                        ],
-                                    ),
-                                ),
-                            ),
-                        ],
-                    ),
-                ),
-                (
-                    "rover",
-                    object(
-                        "rover parameters",
-                        &[
-                            ("length", number("body length (m)")),
-                            ("width", number("body width (m)")),
-                            ("track", number("wheel track (m)")),
-                            ("clearance", number("belly clearance (m)")),
-                            ("max_tilt", number("hazardous tilt (rad)")),
-                            ("max_speed", number("top speed (m/s)")),
-                            ("turn_rate", number("in-place turn rate (rad/s)")),
-                            ("encoder_counts_per_cm", number("encoder counts per cm of wheel travel")),
-                            ("mast_height", number("mast camera height (m)")),
-                            ("mast_fov", number("mast field of view (rad)")),
-                            ("mast_range", number("mast useful range (m)")),
-                            ("body_camera_height", number("body camera height (m)")),
-                            ("body_fov", number("body field of view (rad)")),
-                            ("body_range", number("body useful range (m)")),
-                            ("proximity_range", number("proximity sensor range (m)")),
-                        ],
-                    ),
-                ),
-                (
-                    "sensor_model",
-                    object(
-                        "sensor noise and mounting",
-                        &[
-                            ("mast", imager()),
-                            ("mast_fine", nullable(imager())),
-                            ("body", imager()),
-                            (
-                                "lidar",
-                                object(
-                                    "nodding LIDAR",
-                                    &[
-                                        ("imager", imager()),
-                                        ("fov", number("horizontal field of view (rad)")),
-                                        ("range", number("maximum planar range (m)")),
-                                        ("height", number("mounting height (m)")),
-                                        ("x_offset", number("mounting offset along body x (m)")),
-                                    ],
-                                ),
-                            ),
-                            (
-                                "proximity",
-                                object(
-                                    "proximity threshold sensors",
-                                    &[
-                                        ("height", number("mounting height (m)")),
-                                        ("bearings", fixed_array("beam bearings (rad)", number("rad"), 10)),
-                                        (
-                                            "setback",
-                                            fixed_array("setback behind the front (m)", number("m"), 10),
-                                        ),
-                                        ("ground_return_ratio", number("level-ground return / threshold")),
-                                        ("drop_margin", number("missing-ground margin (m)")),
-                                        ("range_sigma", number("range noise sigma (m)")),
-                                    ],
-                                ),
-                            ),
-                            ("compass_sigma", number("compass sigma (rad)")),
-                            ("inclinometer_sigma", number("inclinometer sigma (rad)")),
-                            ("sun_sigma", number("sun sensor sigma (rad)")),
-                            ("sun_visible", boolean("whether the sun is visible")),
-                            ("gyro_bias_sigma", number("gyro turn-on bias sigma (rad/s)")),
-                            ("gyro_bias_walk", number("gyro bias random walk (rad/s/sqrt(s))")),
-                            ("gyro_noise_density", number("gyro rate noise density (rad/s/sqrt(Hz))")),
-                            ("sample_rate", number("proprioceptive sample rate (Hz)")),
-                            ("initial_rest_samples", integer("samples at rest in the first frame")),
-                            (
-                                "slip",
-                                object(
-                                    "wheel slip",
-                                    &[
-                                        ("base", number("level-ground slip ratio")),
-                                        ("uphill_gain", number("uphill gain")),
-                                        ("downhill_gain", number("downhill gain")),
-                                        ("max", number("slip ratio bound")),
-                                        ("lateral_gain", number("sideways creep gain")),
-                                        ("turn_scrub", number("turn scrub fraction")),
-                                        ("per_command_sigma", number("per-command slip sigma")),
-                                    ],
-                                ),
-                            ),
-                            (
-                                "range_source",
-                                nullable(enumeration("source of the stereo range", &["raycast", "stereo"])),
-                            ),
-                        ],
-                    ),
-                ),
-                ("start", pose2_schema("true start pose")),
-                (
-                    "goal",
-                    object(
-                        "goal and constraints",
-                        &[
-                            ("position", point_schema()),
-                            ("tolerance", number("reach tolerance (m)")),
-                            ("waypoints", points_schema("waypoints in order")),
-                            ("keep_out", array("keep-out polygons", points_schema("polygon vertices"))),
-                        ],
-                    ),
-                ),
-            ],
-        )
     }
 }
 
@@ -691,7 +401,7 @@ mod tests {
     fn world_round_trips_bit_exactly_and_fits_its_schema() {
         let world = small_world();
         assert!(!world.terrain.rocks.is_empty(), "the yard has rocks to carry");
-        let back = through_json(&WorldMsg::of(&world), &WorldMsg::schema()).to_world().unwrap();
+        let back = through_json(&WorldMsg::of(&world)).to_world().unwrap();
         let bits = |d: &Dem| d.heights.data.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back.terrain.dem), bits(&world.terrain.dem));
         assert_eq!(back.terrain.dem.heights.geometry, world.terrain.dem.heights.geometry);
