@@ -32,7 +32,7 @@ use crate::stereo_range::{RangeSource, StereoImaging};
 use crate::vehicle::SlipModel;
 
 /// Parameters of one range imager: ray grid, coverage and noise.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RangeImagerModel {
     /// Rays across the image (columns).
     pub cols: usize,
@@ -60,7 +60,7 @@ impl RangeImagerModel {
 }
 
 /// Nodding LIDAR mounting and coverage (paper 004 section 3.1: Hokuyo on a tilt unit).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct LidarModel {
     /// Ray grid and noise.
     pub imager: RangeImagerModel,
@@ -75,7 +75,7 @@ pub struct LidarModel {
 }
 
 /// The ten SR2 proximity threshold sensors (paper 001).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct ProximityModel {
     /// Mounting height above the wheel plane (m).
     pub height: f64,
@@ -93,8 +93,9 @@ pub struct ProximityModel {
     pub range_sigma: f64,
 }
 
-/// Every noise and mounting parameter of the simulated platform.
-#[derive(Clone, Debug, PartialEq)]
+/// Every noise and mounting parameter of the simulated platform (serialized without the
+/// renderer settings `stereo` and `navcam`, which read back as their defaults).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SensorModel {
     /// Mast stereo pair grid and noise (geometry from `RoverConfig`).
     pub mast: RangeImagerModel,
@@ -130,8 +131,10 @@ pub struct SensorModel {
     /// Where the stereo pairs' range comes from (the LIDAR is always ray cast).
     pub range_source: RangeSource,
     /// How the `stereo` range source images and correlates (also the sun and dust of every image).
+    #[serde(skip)]
     pub stereo: StereoImaging,
     /// How the Navcam pair images on request.
+    #[serde(skip)]
     pub navcam: crate::navcam::NavcamImaging,
 }
 

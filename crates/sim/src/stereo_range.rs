@@ -32,7 +32,10 @@ use crate::render::{self, Atmosphere, RenderSettings, RenderedImage, Scene, Sun,
 use crate::sensors::RangeGeometry;
 
 /// Where the stereo pairs' range comes from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
 pub enum RangeSource {
     /// Rays cast against the true terrain with Gaussian range noise and dropouts.
     #[default]

@@ -34,7 +34,7 @@ const BELLY_SPACING: f64 = 0.05;
 pub const WHEEL_HALF_WIDTH: f64 = 0.07;
 
 /// Wheel-terrain slip parameters (see the module documentation for the formulas).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SlipModel {
     /// Slip ratio on level ground (dimensionless).
     pub base: f64,

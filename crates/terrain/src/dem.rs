@@ -3,7 +3,7 @@
 use rovernav_core::{Grid2, GridGeometry};
 
 /// Maps the local frame of a DEM (metres from its south-west corner) to projected coordinates.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GeoReference {
     /// Coordinate reference system, as text (e.g. "Mars2000 equidistant cylindrical").
     pub crs: String,
@@ -31,7 +31,7 @@ pub struct Dem {
 }
 
 /// A rock: a body sitting on the terrain (paper 000's Mars-yard obstacles).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Rock {
     /// Centre east (local m).
     pub x: f64,

@@ -68,10 +68,7 @@ mod image;
 mod world;
 
 pub use image::{RawImageMsg, TimeMsg, camera_topic};
-pub use world::{
-    GoalMsg, GridMsg, ImagerMsg, LidarMsg, ProximityModelMsg, RockMsg, RoverMsg, SensorModelMsg, SlipMsg,
-    TerrainMsg, WorldMsg,
-};
+pub use world::{TerrainMsg, WorldMsg};
 
 /// Every curated topic with its schema name, derived schema and whether it carries simulation
 /// truth (camera topics are declared on first use with [`RawImageMsg`]'s schema).
