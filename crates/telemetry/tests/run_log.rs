@@ -113,6 +113,12 @@ fn every_message_fits_its_schema_every_topic_is_there_and_time_never_goes_back()
     for t in topics::ALL {
         assert!(summary.channels.values().any(|c| c.topic == t && c.schema.is_some()), "{t}");
     }
+    // The component-bus channels carry their message types' derived schemas, not an empty one.
+    let frame =
+        summary.channels.values().find(|c| c.topic == "/bus/platform/frame").expect("bus frames logged");
+    let schema: serde_json::Value = serde_json::from_slice(&frame.schema.as_ref().unwrap().data).unwrap();
+    assert_eq!(schema["title"], "FrameMsg");
+    assert!(schema["properties"]["frame"].is_object(), "{schema}");
 }
 
 #[test]
