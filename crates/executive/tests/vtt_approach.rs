@@ -38,7 +38,7 @@ tolerance_m = 0.5
 }
 
 #[test]
-#[ignore = "known failure at 8d0911f: the mission's approach loses the rock (NCC peak 0.70 with navigator legs, point-stereo score 0.695 with blind moves) where rovernav eval vtt tracks it; suspected: the mission's estimator starts at z = 0, roll = pitch = 0 (run.rs) while the eval's starts at the settled pose"]
+#[ignore = "known failure at 8d0911f: the approach drives about 5 m toward the rock and then reports a loss (NCC peak 0.70 with navigator legs; point-stereo score 0.695 with blind moves only) where rovernav eval vtt arrives; cause not found (the estimator starts at the settled pose: checked)"]
 fn approach_target_stops_at_the_standoff_of_a_designated_rock() {
     // A rock 5-7 m from the start with nothing taller than 10 cm in the way.
     let probe = Mission::from_toml(&mission_text(0.0, ""), "probe").expect("mission");
