@@ -29,7 +29,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             ("--out", Some(dir)) => out = PathBuf::from(dir),
             _ => {
-                return Err(format!("unknown or incomplete option `{arg}` (use --trials N, --out DIR)").into());
+                return Err(
+                    format!("unknown or incomplete option `{arg}` (use --trials N, --out DIR)").into()
+                );
             }
         }
     }
