@@ -9,7 +9,7 @@ use crate::CampaignError;
 use crate::output::write_atomic;
 use crate::plan::{Job, Plan, TerrainKind};
 use crate::row::Row;
-use rovernav_executive::{RunOutput, run_mission};
+use rovernav_executive::{Run, RunOutput};
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -66,7 +66,7 @@ fn run_one(plan: &Plan, job: &Job, failures_dir: Option<&Path>) -> Result<Row, C
         message,
     };
     let output =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_mission(&mission, origin, &mut |_| {})))
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Run::mission(&mission, origin)?.execute()))
             .map_err(|panic| {
                 let what = panic
                     .downcast_ref::<&str>()

@@ -16,26 +16,22 @@
 //! [`PlatformCall::Finish`] with the goal the mission ended with and its final estimate; the
 //! server answers with a [`Scoring`] computed from truth (goal and localisation errors, distance
 //! driven, hazard contacts and events, optimal length, the true track and sensed cells for the
-//! picture), which [`run_remote`] merges with what the rover side knows (outcome, cycles,
-//! components, tasks, fault) into the usual [`Report`].
+//! picture), which the run's loop merges with what the rover side knows (outcome, cycles,
+//! components, tasks, fault) into the usual [`crate::report::Report`].
 //!
 //! The link is transport-agnostic: the CLI fills it with zenoh (`rovernav sim` / `rovernav
 //! rover`); [`LocalLink`] fills it in process, through JSON, for tests.
 
 use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
-use crate::messages::{ControlAction, FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
-use crate::operator::OperatorLink;
+use crate::messages::{FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
 use crate::platform::{ScheduledFault, SimPlatform};
-use crate::report::{HazardEvent, Report, StageTimes};
-use crate::run::{NoObserver, Progress, RunError, RunObserver, RunOptions, RunOutput, RunSettings, Trace};
-use crate::run::{estimator, navigator_of};
-use crate::runtime::Runtime;
+use crate::report::HazardEvent;
+use crate::scoring::Scorer;
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
-use rovernav_core::{Grid2, GridGeometry, Point2, Pose3};
+use rovernav_core::{Point2, Pose3};
 use rovernav_sim::Simulator;
 use serde::{Deserialize, Serialize};
-use std::time::Instant;
 
 /// The rover process's platform requests (what crosses the network, not the rover's local bus).
 pub const PLATFORM_REQUEST: Topic<PlatformRequest> = Topic::new("/platform/request");
@@ -152,19 +148,6 @@ pub trait PlatformLink: Send {
     fn exchange(&mut self, request: &PlatformRequest) -> Result<PlatformReply, LinkError>;
 }
 
-/// The grid of cells the range data covered, at the DEM's resolution (at least 0.1 m).
-pub fn sensed_grid(world: &World) -> Grid2<bool> {
-    let dem_geometry = *world.terrain.dem.geometry();
-    let res = dem_geometry.resolution.max(0.1);
-    let geometry = GridGeometry {
-        cols: (dem_geometry.width_m() / res).ceil() as usize,
-        rows: (dem_geometry.height_m() / res).ceil() as usize,
-        resolution: res,
-        ..dem_geometry
-    };
-    Grid2::filled(geometry, false)
-}
-
 /// The simulator process's side: a [`SimPlatform`] on a private bus, answering requests.
 pub struct PlatformServer {
     world: World,
@@ -173,11 +156,7 @@ pub struct PlatformServer {
     bus: Bus,
     platform: SimPlatform,
     tap: TapId,
-    truth: Vec<PoseMsg>,
-    sensed: Grid2<bool>,
-    hazard_events: Vec<HazardEvent>,
-    last_hazards: u32,
-    cycles: u64,
+    scorer: Scorer,
     finished: bool,
 }
 
@@ -200,22 +179,8 @@ impl PlatformServer {
         let mut bus = Bus::in_process();
         platform.connect(&mut bus)?;
         let tap = bus.tap()?;
-        let truth = vec![platform.sim().truth()];
-        let sensed = sensed_grid(&world);
-        Ok(Self {
-            world,
-            mission: mission.to_string(),
-            seed,
-            bus,
-            platform,
-            tap,
-            truth,
-            sensed,
-            hazard_events: Vec::new(),
-            last_hazards: 0,
-            cycles: 0,
-            finished: false,
-        })
+        let scorer = Scorer::new(&world, platform.sim().truth());
+        Ok(Self { world, mission: mission.to_string(), seed, bus, platform, tap, scorer, finished: false })
     }
 
     /// Whether a [`PlatformCall::Finish`] has been answered (the serving loop may stop).
@@ -225,7 +190,7 @@ impl PlatformServer {
 
     /// Commands executed so far.
     pub fn cycles(&self) -> u64 {
-        self.cycles
+        self.scorer.cycles()
     }
 
     /// The simulator (truth: for the simulator process's own log lines).
@@ -278,20 +243,7 @@ impl PlatformServer {
             PlatformCall::Finish { .. } => {}
         }
         for e in self.platform.take_executed() {
-            self.cycles += 1;
-            for cloud in &e.frame.clouds {
-                crate::run::mark_sensed(&mut self.sensed, &e.truth, cloud);
-            }
-            if e.hazard_contacts > self.last_hazards {
-                self.last_hazards = e.hazard_contacts;
-                self.hazard_events.push(HazardEvent {
-                    x: e.truth.x,
-                    y: e.truth.y,
-                    cycle: self.cycles,
-                    cause: e.frame.motion_stopped.clone().unwrap_or_default(),
-                });
-            }
-            self.truth.push(e.truth);
+            self.scorer.record(&e);
         }
         let mut outputs = Vec::new();
         for record in self.bus.take_tap(self.tap)? {
@@ -306,32 +258,7 @@ impl PlatformServer {
 
     fn score(&mut self, goal: Point2, estimate: Pose3) -> Scoring {
         self.world.goal.position = goal;
-        let world = &self.world;
-        let sim = self.platform.sim();
-        let truth = sim.truth();
-        let mut sensed = Vec::new();
-        let g = self.sensed.geometry;
-        for r in 0..g.rows {
-            for c in 0..g.cols {
-                if *self.sensed.get(c, r) {
-                    sensed.push([c as u32, r as u32]);
-                }
-            }
-        }
-        Scoring {
-            goal_error_m: Point2::new(truth.x, truth.y).dist(goal),
-            distance_driven_m: sim.distance_driven(),
-            optimal_length_m: crate::world::optimal_length(world),
-            hazard_contacts: sim.hazard_contacts(),
-            sim_time_s: sim.time(),
-            sensing_actions: sim.sensing_actions(),
-            localization_error_m: (truth.x - estimate.x).hypot(truth.y - estimate.y),
-            straight_line_m: world.start.position().dist(goal),
-            hazard_events: self.hazard_events.clone(),
-            cycles: self.cycles,
-            truth: self.truth.clone(),
-            sensed,
-        }
+        self.scorer.scoring(&self.world, self.platform.sim(), estimate)
     }
 }
 
@@ -352,6 +279,16 @@ impl PlatformLink for LocalLink {
         let request = decode(&PLATFORM_REQUEST, &encode(&PLATFORM_REQUEST, request)?)?;
         let reply = self.server.handle(&request);
         Ok(decode(&PLATFORM_REPLY, &encode(&PLATFORM_REPLY, &reply)?)?)
+    }
+}
+
+/// A link to no simulator: every exchange fails. For assembling a remote run that never steps
+/// (printing its component graph).
+pub struct NoLink;
+
+impl PlatformLink for NoLink {
+    fn exchange(&mut self, _request: &PlatformRequest) -> Result<PlatformReply, LinkError> {
+        Err(LinkError("no simulator is connected".into()))
     }
 }
 
@@ -487,155 +424,4 @@ impl Component for RemotePlatform {
     fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
         self.forward(ctx, PlatformCall::Idle(state))
     }
-}
-
-/// Runs the autonomy of a mission against a platform across `link`: the rover process's half of
-/// a two-process run. `world` gives the rover's configuration, start, goal and keep-out zones
-/// (its terrain is not given to any component; the picture uses it after the run); scheduled
-/// faults are the simulator process's business. The report equals the single-process run's,
-/// wall-clock figures aside.
-pub fn run_remote(
-    world: World,
-    mission: &RunSettings,
-    options: &RunOptions,
-    origin: &str,
-    link: Box<dyn PlatformLink>,
-    on_progress: &mut dyn FnMut(&Progress),
-    operator: Option<&mut dyn OperatorLink>,
-) -> Result<RunOutput, RunError> {
-    run_remote_logged(world, mission, options, origin, link, on_progress, operator, &mut NoObserver)
-}
-
-/// [`run_remote`] with an observer of the rover process's own bus and of the final report and
-/// trace (a telemetry log); it gets no per-cycle records, which carry truth this side lacks.
-#[allow(clippy::too_many_arguments)]
-pub fn run_remote_logged(
-    mut world: World,
-    mission: &RunSettings,
-    options: &RunOptions,
-    origin: &str,
-    link: Box<dyn PlatformLink>,
-    on_progress: &mut dyn FnMut(&Progress),
-    mut operator: Option<&mut dyn OperatorLink>,
-    observer: &mut dyn RunObserver,
-) -> Result<RunOutput, RunError> {
-    let wall = Instant::now();
-    let (navigator, localizer) = crate::run::algorithms(&world, mission, origin)?;
-
-    let mut runtime = Runtime::new(Bus::in_process())?;
-    let platform = Box::new(RemotePlatform::new(link, &mission.name, mission.seed));
-    crate::run::add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, platform)?;
-    let (mut deliberative, replies, tap) =
-        crate::run::wire_deliberative(&mut runtime, &world, mission, options, observer)?;
-
-    let mut trace = Trace::default();
-    trace.estimate.push(estimator(&runtime).estimate().pose);
-    runtime.command(None, ControlAction::Resume)?;
-    runtime.settle(runtime.clock())?;
-
-    let mut cycles = 0u64;
-    let (outcome, message) = loop {
-        let now = remote(&runtime).sim_time();
-        if let Some(link) = operator.as_deref_mut() {
-            for line in link.poll(cycles, deliberative.waiting()) {
-                runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
-            }
-            if link.closed() {
-                deliberative.close_input();
-            }
-        }
-        deliberative.step(runtime.bus())?;
-        crate::run::forward_replies(runtime.bus(), &replies, operator.as_deref_mut())?;
-        if let Some((outcome, message)) = deliberative.end() {
-            break (*outcome, message.clone());
-        }
-        runtime.tick(now)?;
-        if let Some(tap) = tap {
-            observer.on_bus(&runtime.bus().take_tap(tap)?);
-        }
-        let executed = remote_mut(&mut runtime).take_executed();
-        let plan = navigator_of(&runtime).planned_path();
-        if !plan.is_empty() && trace.plans.last() != Some(&plan) {
-            trace.plans.push(plan.clone());
-        }
-        let estimate = estimator(&runtime).estimate();
-        for frame in executed {
-            cycles += 1;
-            trace.estimate.push(estimate.pose);
-            let goal = deliberative.goal().unwrap_or(world.goal.position);
-            // The rover process knows no truth: progress shows the estimated distance to go.
-            on_progress(&Progress {
-                cycles,
-                sim_time_s: frame.t,
-                time_fraction: (frame.t / mission.time_limit_s).min(1.0),
-                distance_to_goal_m: Point2::new(estimate.pose.x, estimate.pose.y).dist(goal),
-            });
-        }
-    };
-    runtime.settle(runtime.clock())?;
-    crate::run::forward_replies(runtime.bus(), &replies, operator)?;
-    if let Some(tap) = tap {
-        observer.on_bus(&runtime.bus().take_tap(tap)?);
-    }
-    trace.overlays = navigator_of(&runtime).overlays();
-
-    if let Some(goal) = deliberative.goal() {
-        world.goal.position = goal;
-    }
-    let estimate = estimator(&runtime).estimate().pose;
-    let scoring = remote_mut(&mut runtime)
-        .finish(world.goal.position, estimate)
-        .map_err(|e| RunError::Bus(BusError::Transport(e.to_string())))?;
-    if scoring.cycles != cycles {
-        return Err(RunError::Bus(BusError::Transport(format!(
-            "the simulator executed {} commands, the rover counted {cycles}",
-            scoring.cycles
-        ))));
-    }
-    trace.truth = scoring.truth.clone();
-    let mut sensed = sensed_grid(&world);
-    for [c, r] in &scoring.sensed {
-        let (c, r) = (*c as usize, *r as usize);
-        if c < sensed.geometry.cols && r < sensed.geometry.rows {
-            *sensed.get_mut(c, r) = true;
-        }
-    }
-    trace.sensed = Some(sensed);
-    let spent = StageTimes {
-        navigation_s: runtime.busy_s("navigator"),
-        localization_s: runtime.busy_s("pose-estimator"),
-        platform_s: runtime.busy_s("platform"),
-    };
-    let report = Report {
-        outcome: outcome.as_str().into(),
-        message,
-        goal_error_m: scoring.goal_error_m,
-        distance_driven_m: scoring.distance_driven_m,
-        optimal_length_m: scoring.optimal_length_m,
-        hazard_contacts: scoring.hazard_contacts,
-        sim_time_s: scoring.sim_time_s,
-        wall_time_s: wall.elapsed().as_secs_f64(),
-        cycles,
-        sensing_actions: scoring.sensing_actions,
-        localization_error_m: scoring.localization_error_m,
-        navigator: navigator_of(&runtime).navigator_name().to_string(),
-        localizer: mission.localizer.clone(),
-        seed: mission.seed,
-        mission: mission.name.clone(),
-        straight_line_m: scoring.straight_line_m,
-        hazard_events: scoring.hazard_events,
-        compute_per_cycle: crate::run::per_cycle(spent, cycles),
-        localization_stats: Some(estimator(&runtime).localizer_stats().into()),
-        ..crate::run::executive_outcome(&runtime, &deliberative)
-    };
-    observer.on_finish(&report, &trace);
-    Ok(RunOutput { report, trace, world })
-}
-
-// `run_remote` adds these components, so the look-ups cannot fail.
-fn remote(rt: &Runtime) -> &RemotePlatform {
-    rt.get::<RemotePlatform>().expect("a remote run has a remote platform")
-}
-fn remote_mut(rt: &mut Runtime) -> &mut RemotePlatform {
-    rt.get_mut::<RemotePlatform>().expect("a remote run has a remote platform")
 }

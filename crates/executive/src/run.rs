@@ -1,32 +1,24 @@
-//! A run: the world and the mission's components wired on a bus, stepped until the deliberative
-//! layer ends the mission, and scored against simulator truth.
+//! A run: what it is given ([`RunSettings`], [`RunOptions`], an observer, an operator, a remote
+//! platform), what it produces ([`RunOutput`]) and the one builder every caller goes through
+//! ([`Run`]).
 //!
-//! The loop itself holds no autonomy: the deliberative layer ([`crate::deliberative`]) presents
-//! the plan to the reflexive components ([`crate::reflexive`], [`crate::sensor_servers`]) and the
-//! platform ([`crate::platform`]), which the runtime ([`crate::runtime`]) steps on simulated
-//! time. What the loop does is watch: it reads truth from the platform for the report, the
-//! traverse picture and observers, and relays operator lines and answers.
+//! The loop itself ([`crate::run_loop`]) holds no autonomy: the deliberative layer presents the
+//! plan to the components of the graph ([`crate::graph`]), which the runtime steps on simulated
+//! time; the loop watches (truth for the report and pictures through [`crate::scoring`], observer
+//! callbacks, operator lines and answers).
 
-use crate::components::Port;
-use crate::deliberative::{Deliberative, DeliberativeConfig, TaskSpec};
+use crate::deliberative::TaskSpec;
 use crate::fault_protection::FaultProtectionConfig;
-use crate::messages::{ControlAction, topics};
 use crate::mission::Mission;
 use crate::operator::OperatorLink;
-use crate::platform::{ArmConfig, ScheduledFault, SimPlatform, ToolingArm};
-use crate::reflexive::{MotionController, NavigatorComponent, PoseEstimatorComponent, PoseEstimatorConfig};
-use crate::report::{ComponentReport, FaultReport, HazardEvent, Report, StageTimes, TaskReport};
-use crate::runtime::{Runtime, RuntimeError};
-use crate::sensor_servers::{
-    ContactMonitor, InertialSensors, MAX_BODY_CONTACTS, RangeSensors, WheelOdometry,
-};
+use crate::platform::{ArmConfig, ScheduledFault};
+use crate::reflexive::PoseEstimatorConfig;
+use crate::remote::PlatformLink;
+use crate::report::Report;
+use crate::runtime::RuntimeError;
 use crate::world::{World, WorldError, build_world};
-use rovernav_bus::{Bus, BusError, InProcessTransport, Record, Subscriber, TapId};
-use rovernav_core::{
-    Grid2, GridGeometry, NavCommand, Navigator, Overlay, Point2, Pose3, PoseEstimate, SensorFrame,
-};
-use rovernav_sim::Simulator;
-use std::time::Instant;
+use rovernav_bus::{BusError, Record};
+use rovernav_core::{Grid2, NavCommand, Overlay, Point2, Pose3, PoseEstimate, SensorFrame};
 
 /// Why a run could not start.
 #[derive(Debug, thiserror::Error)]
@@ -230,396 +222,101 @@ impl RunOptions {
     }
 }
 
-/// Runs a mission to completion. `origin` names the mission source in error messages.
-pub fn run_mission(
-    mission: &Mission,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-) -> Result<RunOutput, RunError> {
-    run_mission_observed(mission, origin, on_progress, &mut NoObserver)
+/// A run, configured step by step and then executed: the one entry point of every run, in
+/// process or against a remote platform.
+///
+/// ```no_run
+/// # use rovernav_executive::{Mission, Run};
+/// let mission = Mission::default_mission();
+/// let output = Run::mission(&mission, "built-in default mission")?.execute()?;
+/// println!("{}", output.report.outcome);
+/// # Ok::<(), rovernav_executive::RunError>(())
+/// ```
+pub struct Run<'a> {
+    pub(crate) world: World,
+    pub(crate) settings: RunSettings,
+    pub(crate) options: RunOptions,
+    pub(crate) origin: String,
+    pub(crate) link: Option<Box<dyn PlatformLink>>,
+    pub(crate) observer: Option<&'a mut dyn RunObserver>,
+    pub(crate) operator: Option<&'a mut dyn OperatorLink>,
+    pub(crate) progress: Option<&'a mut dyn FnMut(&Progress)>,
 }
 
-/// Runs a traverse in a given world (hand-built scenario terrains use this directly).
-pub fn run_world(
-    world: World,
-    mission: &RunSettings,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-) -> Result<RunOutput, RunError> {
-    run_world_observed(world, mission, origin, on_progress, &mut NoObserver)
-}
-
-/// Runs a mission with an observer watching every cycle.
-pub fn run_mission_observed(
-    mission: &Mission,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-    observer: &mut dyn RunObserver,
-) -> Result<RunOutput, RunError> {
-    run_mission_with(mission, origin, on_progress, observer, None)
-}
-
-/// [`run_mission_observed`] with an operator sending commands while the mission runs.
-pub fn run_mission_with(
-    mission: &Mission,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-    observer: &mut dyn RunObserver,
-    operator: Option<&mut dyn OperatorLink>,
-) -> Result<RunOutput, RunError> {
-    let world = build_world(mission, origin)?;
-    let options = RunOptions::of(mission, &world);
-    run_world_with(world, &RunSettings::of(mission), &options, origin, on_progress, observer, operator)
-}
-
-/// Wires the deliberative layer onto a runtime whose components are added (local or remote
-/// platform alike): checks every port is served, builds the deliberative layer from the world and
-/// settings, subscribes to operator replies, taps the bus if the observer wants it, and
-/// initialises the runtime.
-pub(crate) fn wire_deliberative(
-    runtime: &mut Runtime,
-    world: &World,
-    mission: &RunSettings,
-    options: &RunOptions,
-    observer: &dyn RunObserver,
-) -> Result<(Deliberative, Subscriber<String>, Option<TapId>), RunError> {
-    let mut external = Deliberative::ports();
-    external.push(Port::of(topics::OPERATOR_COMMAND));
-    runtime.validate(&external)?;
-    let config = DeliberativeConfig {
-        time_limit_s: mission.time_limit_s,
-        max_cycles: mission.max_cycles,
-        keep_out: world.goal.keep_out.clone(),
-        tolerance: world.goal.tolerance,
-        mast_range_m: world.rover.mast_range,
-        fault_protection: options.fault_protection.clone(),
-    };
-    let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?
-        .with_rover(world.rover.clone(), world.sensor_model.navcam.width);
-    let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
-    let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
-    runtime.initialize(0.0)?;
-    Ok((deliberative, replies, tap))
-}
-
-/// [`run_world`] with an observer watching every cycle.
-pub fn run_world_observed(
-    world: World,
-    mission: &RunSettings,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-    observer: &mut dyn RunObserver,
-) -> Result<RunOutput, RunError> {
-    run_world_with(world, mission, &RunOptions::default(), origin, on_progress, observer, None)
-}
-
-/// Runs a traverse through the components and the bus: the deliberative layer presents the plan
-/// to the reflexive layer, the runtime steps the components, and this loop only watches (truth
-/// for scoring and pictures, observer callbacks, operator input and answers).
-pub fn run_world_with(
-    mut world: World,
-    mission: &RunSettings,
-    options: &RunOptions,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-    observer: &mut dyn RunObserver,
-    mut operator: Option<&mut dyn OperatorLink>,
-) -> Result<RunOutput, RunError> {
-    let wall = Instant::now();
-    let (navigator, localizer) = algorithms(&world, mission, origin)?;
-    let sim = Simulator::new(
-        world.terrain.clone(),
-        world.rover.clone(),
-        world.sensor_model.clone(),
-        world.start,
-        mission.seed,
-    );
-
-    let bus = match options.bus {
-        BusKind::InProcess => Bus::in_process(),
-        BusKind::Serialized => Bus::over(Box::new(InProcessTransport::new())),
-    };
-    let mut runtime = Runtime::new(bus)?;
-    let sim_platform = Box::new(SimPlatform::new(sim, options.faults.clone()));
-    add_components(&mut runtime, navigator, localizer, mission, &world.rover, options, sim_platform)?;
-    let (mut deliberative, replies, tap) =
-        wire_deliberative(&mut runtime, &world, mission, options, observer)?;
-
-    let mut trace = Trace::default();
-    let dem_geometry = *world.terrain.dem.geometry();
-    let sensed_res = dem_geometry.resolution.max(0.1);
-    let sensed_geometry = GridGeometry {
-        cols: (dem_geometry.width_m() / sensed_res).ceil() as usize,
-        rows: (dem_geometry.height_m() / sensed_res).ceil() as usize,
-        resolution: sensed_res,
-        ..dem_geometry
-    };
-    let mut sensed = Grid2::filled(sensed_geometry, false);
-    let first_frame = platform(&runtime).initial_frame().clone();
-    trace.truth.push(platform(&runtime).sim().truth());
-    trace.estimate.push(estimator(&runtime).estimate().pose);
-    observer.on_start(&world, mission, &first_frame, &estimator(&runtime).estimate());
-    runtime.command(None, ControlAction::Resume)?;
-    runtime.settle(runtime.clock())?;
-
-    let mut cycles = 0u64;
-    let mut last_hazards = 0;
-    let mut hazard_events = Vec::new();
-    let (outcome, message) = loop {
-        let now = platform(&runtime).sim().time();
-        if let Some(link) = operator.as_deref_mut() {
-            for line in link.poll(cycles, deliberative.waiting()) {
-                runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
-            }
-            if link.closed() {
-                deliberative.close_input();
-            }
-        }
-        deliberative.step(runtime.bus())?;
-        forward_replies(runtime.bus(), &replies, operator.as_deref_mut())?;
-        if let Some((outcome, message)) = deliberative.end() {
-            break (*outcome, message.clone());
-        }
-        runtime.tick(now)?;
-        if let Some(tap) = tap {
-            observer.on_bus(&runtime.bus().take_tap(tap)?);
-        }
-        let executed = platform_mut(&mut runtime).take_executed();
-        let plan = navigator_of(&runtime).planned_path();
-        if !plan.is_empty() && trace.plans.last() != Some(&plan) {
-            trace.plans.push(plan.clone());
-        }
-        let estimate = estimator(&runtime).estimate();
-        for e in executed {
-            cycles += 1;
-            for cloud in &e.frame.clouds {
-                mark_sensed(&mut sensed, &e.truth, cloud);
-            }
-            if e.hazard_contacts > last_hazards {
-                last_hazards = e.hazard_contacts;
-                hazard_events.push(HazardEvent {
-                    x: e.truth.x,
-                    y: e.truth.y,
-                    cycle: cycles,
-                    cause: e.frame.motion_stopped.clone().unwrap_or_default(),
-                });
-            }
-            trace.truth.push(e.truth);
-            trace.estimate.push(estimate.pose);
-            let sim_time_s = e.frame.t;
-            observer.on_cycle(&CycleRecord {
-                cycle: cycles,
-                sim_time_s,
-                command: &e.command,
-                frame: &e.frame,
-                estimate: &estimate,
-                truth: &e.truth,
-                plan: &plan,
-                hazard_contacts: e.hazard_contacts,
-            });
-            let goal = deliberative.goal().unwrap_or(world.goal.position);
-            on_progress(&Progress {
-                cycles,
-                sim_time_s,
-                time_fraction: (sim_time_s / mission.time_limit_s).min(1.0),
-                distance_to_goal_m: Point2::new(e.truth.x, e.truth.y).dist(goal),
-            });
-        }
-    };
-    // The deliberative layer's last state commands (stand down) take effect.
-    runtime.settle(runtime.clock())?;
-    forward_replies(runtime.bus(), &replies, operator)?;
-    if let Some(tap) = tap {
-        observer.on_bus(&runtime.bus().take_tap(tap)?);
-    }
-    trace.overlays = navigator_of(&runtime).overlays();
-    trace.sensed = Some(sensed);
-
-    // Operators may have moved the goal: score against the goal the mission ended with.
-    if let Some(goal) = deliberative.goal() {
-        world.goal.position = goal;
-    }
-    let goal = world.goal.clone();
-    let sim = platform(&runtime).sim();
-    let truth = sim.truth();
-    let estimate = estimator(&runtime).estimate().pose;
-    let spent = StageTimes {
-        navigation_s: runtime.busy_s("navigator"),
-        localization_s: runtime.busy_s("pose-estimator"),
-        platform_s: runtime.busy_s("platform"),
-    };
-    let report = Report {
-        outcome: outcome.as_str().into(),
-        message,
-        goal_error_m: Point2::new(truth.x, truth.y).dist(goal.position),
-        distance_driven_m: sim.distance_driven(),
-        optimal_length_m: crate::world::optimal_length(&world),
-        hazard_contacts: sim.hazard_contacts(),
-        sim_time_s: sim.time(),
-        wall_time_s: wall.elapsed().as_secs_f64(),
-        cycles,
-        sensing_actions: sim.sensing_actions(),
-        localization_error_m: (truth.x - estimate.x).hypot(truth.y - estimate.y),
-        navigator: navigator_of(&runtime).navigator_name().to_string(),
-        localizer: mission.localizer.clone(),
-        seed: mission.seed,
-        mission: mission.name.clone(),
-        straight_line_m: world.start.position().dist(goal.position),
-        hazard_events,
-        compute_per_cycle: per_cycle(spent, cycles),
-        localization_stats: Some(estimator(&runtime).localizer_stats().into()),
-        ..executive_outcome(&runtime, &deliberative)
-    };
-    observer.on_finish(&report, &trace);
-    Ok(RunOutput { report, trace, world })
-}
-
-/// A localiser chosen by name.
-type BoxedLocalizer = Box<dyn rovernav_core::Localizer>;
-
-/// The navigator and localiser a mission names, the localiser starting at the world's start.
-pub(crate) fn algorithms(
-    world: &World,
-    mission: &RunSettings,
-    origin: &str,
-) -> Result<(Box<dyn Navigator>, BoxedLocalizer), RunError> {
-    let registry = rovernav_navigation::registry();
-    let navigator: Box<dyn Navigator> =
-        registry.build_navigator(&registry_name(mission), &world.rover, &mission.navigator_params).map_err(
-            |e| match e {
-                rovernav_navigation::NavigatorError::UnknownNavigator { name, known } => {
-                    RunError::UnknownNavigator { origin: origin.into(), name, known: known.join(", ") }
-                }
-                other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
-            },
-        )?;
-    let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let no_params = rovernav_navigation::NavigatorParams::new();
-    let localizer =
-        registry.build_localizer(&mission.localizer, &world.rover, initial, &no_params).map_err(|e| match e {
-            rovernav_navigation::NavigatorError::UnknownLocalizer { name, known } => {
-                RunError::UnknownLocalizer { origin: origin.into(), name, known: known.join(", ") }
-            }
-            other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
-        })?;
-    Ok((navigator, localizer))
-}
-
-/// The registry name every leg's navigator is built from: the mission's, wrapped in the
-/// look-back decorator ("+look-back") when a map-matching localiser needs views back over the
-/// terrain crossed (issue 5 item 5) and the name does not ask for it already. One name for
-/// the first leg and the later ones, which the navigator component builds afresh.
-fn registry_name(mission: &RunSettings) -> String {
-    rovernav_navigation::registry().decorated(&mission.navigator, &mission.localizer)
-}
-
-/// The report's executive part: final component states, the diagnosed fault and each task's
-/// state (the same for a local and a remote run).
-pub(crate) fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
-    Report {
-        components: runtime
-            .states()
-            .into_iter()
-            .map(|c| ComponentReport {
-                name: c.name.into(),
-                state: c.state.as_str().into(),
-                message: c.message,
-            })
-            .collect(),
-        fault: deliberative.diagnosis().map(|(d, cycle, time_s)| FaultReport {
-            kind: d.kind.as_str().into(),
-            component: d.component.clone(),
-            message: d.message.clone(),
-            cycle: *cycle,
-            time_s: *time_s,
-        }),
-        tasks: deliberative
-            .tasks()
-            .iter()
-            .map(|t| TaskReport {
-                id: t.id,
-                kind: t.kind.name().into(),
-                target: t.kind.target().map(|p| [p.x, p.y]),
-                state: t.state.as_str().into(),
-                message: t.message.clone(),
-            })
-            .collect(),
-        ..Report::default()
-    }
-}
-
-/// Adds a run's components in stepping order around a platform (the simulator in process, or
-/// its stand-in across a link): one list, so a remote run steps exactly as a local one.
-pub(crate) fn add_components(
-    runtime: &mut Runtime,
-    navigator: Box<dyn Navigator>,
-    localizer: Box<dyn rovernav_core::Localizer>,
-    mission: &RunSettings,
-    rover: &rovernav_core::RoverConfig,
-    options: &RunOptions,
-    platform: Box<dyn crate::components::Component>,
-) -> Result<(), RuntimeError> {
-    runtime.add(Box::new(
-        NavigatorComponent::new(navigator, &registry_name(mission), rover.clone())
-            .with_params(mission.navigator_params.clone()),
-    ))?;
-    runtime.add(Box::new(ToolingArm::new(options.arm.clone())))?;
-    runtime.add(Box::new(MotionController::new()))?;
-    runtime.add(platform)?;
-    runtime.add(Box::new(RangeSensors::new()))?;
-    runtime.add(Box::new(crate::camera_server::CameraServer::new()))?;
-    runtime.add(Box::new(InertialSensors::new()))?;
-    runtime.add(Box::new(WheelOdometry::new(rover.encoder_counts_per_cm, rover.track)))?;
-    runtime.add(Box::new(ContactMonitor::new(MAX_BODY_CONTACTS)))?;
-    runtime.add(Box::new(PoseEstimatorComponent::new(localizer, options.pose_estimator.clone())))?;
-    Ok(())
-}
-
-/// Hands the deliberative layer's answers to the operator.
-pub(crate) fn forward_replies<'a>(
-    bus: &mut Bus,
-    replies: &Subscriber<String>,
-    operator: Option<&mut (dyn OperatorLink + 'a)>,
-) -> Result<(), BusError> {
-    let answers = bus.take(replies)?;
-    if let Some(link) = operator {
-        for a in answers.iter().filter(|a| !a.is_empty()) {
-            link.reply(a);
+impl<'a> Run<'a> {
+    /// A traverse of `settings` in a given world (hand-built scenario terrains), without extra
+    /// tasks or faults, against the simulator in process.
+    pub fn new(world: World, settings: RunSettings) -> Self {
+        Self {
+            world,
+            settings,
+            options: RunOptions::default(),
+            origin: "run".into(),
+            link: None,
+            observer: None,
+            operator: None,
+            progress: None,
         }
     }
-    Ok(())
-}
 
-// Every run adds these components (above), so the look-ups cannot fail.
-fn platform(rt: &Runtime) -> &SimPlatform {
-    rt.get::<SimPlatform>().expect("every run has a platform")
-}
-fn platform_mut(rt: &mut Runtime) -> &mut SimPlatform {
-    rt.get_mut::<SimPlatform>().expect("every run has a platform")
-}
-pub(crate) fn estimator(rt: &Runtime) -> &PoseEstimatorComponent {
-    rt.get::<PoseEstimatorComponent>().expect("every run has a pose estimator")
-}
-pub(crate) fn navigator_of(rt: &Runtime) -> &NavigatorComponent {
-    rt.get::<NavigatorComponent>().expect("every run has a navigator")
-}
-
-/// Totals divided by the cycle count (zero when no command ran).
-pub(crate) fn per_cycle(total: StageTimes, cycles: u64) -> StageTimes {
-    let n = cycles.max(1) as f64;
-    StageTimes {
-        navigation_s: total.navigation_s / n,
-        localization_s: total.localization_s / n,
-        platform_s: total.platform_s / n,
+    /// A mission file's run: its world, settings, tasks and scheduled faults. `origin` names the
+    /// mission source in error messages.
+    pub fn mission(mission: &Mission, origin: &str) -> Result<Self, RunError> {
+        let world = build_world(mission, origin)?;
+        let options = RunOptions::of(mission, &world);
+        Ok(Self::new(world, RunSettings::of(mission)).options(options).origin(origin))
     }
-}
 
-/// Marks the cells a cloud's points fall in (display only, so true placement is fine).
-pub(crate) fn mark_sensed(sensed: &mut Grid2<bool>, truth: &Pose3, cloud: &rovernav_core::PointCloud) {
-    for p in &cloud.points {
-        let w = truth.transform([p[0] as f64, p[1] as f64, p[2] as f64]);
-        if let Some((c, r)) = sensed.geometry.cell_of(w[0], w[1]) {
-            *sensed.get_mut(c, r) = true;
-        }
+    /// Replaces the tasks, faults, component parameters and bus.
+    pub fn options(mut self, options: RunOptions) -> Self {
+        self.options = options;
+        self
+    }
+
+    /// Names the mission source in error messages.
+    pub fn origin(mut self, origin: &str) -> Self {
+        self.origin = origin.to_string();
+        self
+    }
+
+    /// An observer watching every cycle (telemetry logs, live displays).
+    pub fn observer(mut self, observer: &'a mut dyn RunObserver) -> Self {
+        self.observer = Some(observer);
+        self
+    }
+
+    /// An operator sending commands while the mission runs.
+    pub fn operator(mut self, operator: &'a mut dyn OperatorLink) -> Self {
+        self.operator = Some(operator);
+        self
+    }
+
+    /// A progress callback, called after every executed command.
+    pub fn progress(mut self, on_progress: &'a mut dyn FnMut(&Progress)) -> Self {
+        self.progress = Some(on_progress);
+        self
+    }
+
+    /// Drives a platform across `link` instead of the simulator in process (the rover process's
+    /// half of a two-process run): the world then gives only the rover's configuration, start,
+    /// goal and keep-out zones, scheduled faults are the simulator process's business, and the
+    /// truth-based figures come back from the simulator at the end. Observers get the bus and the
+    /// final report, not per-cycle records (they carry truth this side lacks).
+    pub fn remote(mut self, link: Box<dyn PlatformLink>) -> Self {
+        self.link = Some(link);
+        self
+    }
+
+    /// Runs to the end of the mission and scores the run.
+    pub fn execute(self) -> Result<RunOutput, RunError> {
+        crate::run_loop::drive(self)
+    }
+
+    /// The component graph this run would step (nothing runs).
+    pub fn graph(self) -> Result<crate::graph::Graph, RunError> {
+        let remote = self.link.is_some();
+        let (runtime, _) =
+            crate::run_loop::assemble(&self.world, &self.settings, &self.options, &self.origin, self.link)?;
+        Ok(crate::graph::Graph::of(&runtime, &self.settings.name, remote))
     }
 }

@@ -15,7 +15,7 @@
 //! integrated by the pose estimator within the same tick, as in the stop-and-go loop of a
 //! planetary rover. Nothing here depends on wall-clock time: a run is deterministic for a seed.
 
-use crate::components::{Component, ComponentFault, Ctx, DEFAULT_RATE_HZ, JausState, Port};
+use crate::components::{Component, ComponentFault, Ctx, DEFAULT_RATE_HZ, JausState, Port, Ports};
 use crate::messages::{ComponentStatusMsg, ControlAction, ControlMsg, topics};
 use rovernav_bus::{Bus, BusError, Subscriber};
 use std::any::Any;
@@ -51,6 +51,14 @@ pub enum RuntimeError {
         /// The other.
         b: &'static str,
     },
+    /// A graph entry built a component with another name.
+    #[error("the graph's entry `{entry}` built a component named `{built}`")]
+    Misnamed {
+        /// The entry's name.
+        entry: &'static str,
+        /// The built component's name.
+        built: &'static str,
+    },
     /// The bus cannot deliver within a tick.
     #[error("the lockstep runtime needs a synchronous transport")]
     Asynchronous,
@@ -62,6 +70,7 @@ pub enum RuntimeError {
 /// A component with the state the runtime keeps for it.
 struct Slot {
     component: Box<dyn Component>,
+    rate_hz: f64,
     state: JausState,
     message: String,
     next_due: f64,
@@ -97,8 +106,15 @@ impl Runtime {
         Ok(Self { bus, slots: Vec::new(), control, clock: f64::NEG_INFINITY })
     }
 
-    /// Adds a component (in Initialization) after those already added and connects it.
-    pub fn add(&mut self, mut component: Box<dyn Component>) -> Result<(), RuntimeError> {
+    /// Adds a component (in Initialization) after those already added and connects it; it
+    /// steps at its own rate ([`Component::rate_hz`]).
+    pub fn add(&mut self, component: Box<dyn Component>) -> Result<(), RuntimeError> {
+        let rate_hz = component.rate_hz();
+        self.add_at(component, rate_hz)
+    }
+
+    /// [`Runtime::add`] at a given rate (Hz): the component graph's ([`crate::graph`]).
+    pub fn add_at(&mut self, mut component: Box<dyn Component>, rate_hz: f64) -> Result<(), RuntimeError> {
         let name = component.name();
         if self.slots.iter().any(|s| s.component.name() == name) {
             return Err(RuntimeError::Duplicate(name));
@@ -106,6 +122,7 @@ impl Runtime {
         component.connect(&mut self.bus)?;
         self.slots.push(Slot {
             component,
+            rate_hz,
             state: JausState::Initialization,
             message: "created".into(),
             next_due: f64::NEG_INFINITY,
@@ -183,7 +200,7 @@ impl Runtime {
     /// The shortest component period (s): how far the clock moves in a tick where the platform
     /// did not act.
     pub fn base_period(&self) -> f64 {
-        let fastest = self.slots.iter().map(|s| s.component.rate_hz()).fold(DEFAULT_RATE_HZ, f64::max);
+        let fastest = self.slots.iter().map(|s| s.rate_hz).fold(DEFAULT_RATE_HZ, f64::max);
         1.0 / fastest
     }
 
@@ -204,7 +221,7 @@ impl Runtime {
             if time_s + DUE_EPSILON_S < slot.next_due {
                 continue;
             }
-            slot.next_due = time_s + 1.0 / slot.component.rate_hz().max(1e-6);
+            slot.next_due = time_s + 1.0 / slot.rate_hz.max(1e-6);
             self.run(i, time_s)?;
         }
         self.apply_control(time_s)?;
@@ -282,6 +299,11 @@ impl Runtime {
             .collect()
     }
 
+    /// Every component's name, rate (Hz) and declared ports, in stepping order.
+    pub fn nodes(&self) -> Vec<(&'static str, f64, Ports)> {
+        self.slots.iter().map(|s| (s.component.name(), s.rate_hz, s.component.ports())).collect()
+    }
+
     /// One component's state.
     pub fn state(&self, name: &str) -> Option<JausState> {
         self.slots.iter().find(|s| s.component.name() == name).map(|s| s.state)
@@ -306,7 +328,6 @@ impl Runtime {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::components::Ports;
     use rovernav_bus::Topic;
 
     const NUMBERS: Topic<u64> = Topic::new("/test/numbers");

@@ -14,8 +14,7 @@ use rovernav_executive::reflexive::{MotionController, NavigatorComponent, PoseEs
 use rovernav_executive::runtime::Runtime;
 use rovernav_executive::sensor_servers::{InertialSensors, MAX_BODY_CONTACTS, RangeSensors, WheelOdometry};
 use rovernav_executive::{
-    BusKind, Mission, NoObserver, Report, RunOptions, RunOutput, RunSettings, ScriptedOperator, World,
-    build_world, run_world_with,
+    BusKind, Mission, Report, Run, RunOptions, RunOutput, RunSettings, ScriptedOperator, World, build_world,
 };
 use rovernav_sim::Simulator;
 
@@ -127,8 +126,7 @@ fn as_reference(out: &RunOutput) -> Reference {
 fn bus_run(mission: &Mission, bus: BusKind) -> RunOutput {
     let world = build_world(mission, "test").unwrap();
     let options = RunOptions { bus, ..RunOptions::of(mission, &world) };
-    run_world_with(world, &RunSettings::of(mission), &options, "test", &mut |_| {}, &mut NoObserver, None)
-        .unwrap()
+    Run::new(world, RunSettings::of(mission)).options(options).execute().unwrap()
 }
 
 /// The report without its wall-clock figures.
@@ -298,16 +296,8 @@ fn scripted_run(mission: &Mission, script: &[(u64, &str)]) -> (RunOutput, Script
     let world = build_world(mission, "test").unwrap();
     let options = RunOptions::of(mission, &world);
     let mut operator = ScriptedOperator::new(script);
-    let out = run_world_with(
-        world,
-        &RunSettings::of(mission),
-        &options,
-        "test",
-        &mut |_| {},
-        &mut NoObserver,
-        Some(&mut operator),
-    )
-    .unwrap();
+    let out =
+        Run::new(world, RunSettings::of(mission)).options(options).operator(&mut operator).execute().unwrap();
     (out, operator)
 }
 
@@ -355,8 +345,7 @@ fn an_observer_can_record_every_bus_message_as_json() {
     let mut log = BusLog::default();
     let options = RunOptions::of(&mission, &world);
     let out =
-        run_world_with(world, &RunSettings::of(&mission), &options, "test", &mut |_| {}, &mut log, None)
-            .unwrap();
+        Run::new(world, RunSettings::of(&mission)).options(options).observer(&mut log).execute().unwrap();
     let on = |topic: &str| log.0.iter().filter(|r| r.topic == topic).count() as u64;
     // The initial frame, one frame per command, and the stand-down of every component at the end.
     assert_eq!(on("/platform/frame"), out.report.cycles + 1);

@@ -1,12 +1,12 @@
 //! The default mission closes the loop: the simulated rover reaches the goal without touching a
 //! hazard (simulator truth), and the same seed gives the same run.
 
-use rovernav_executive::{Mission, run_mission};
+use rovernav_executive::{Mission, Run};
 
 #[test]
 fn default_mission_reaches_the_goal_without_hazard_contact_and_is_deterministic() {
     let mission = Mission::default_mission();
-    let first = run_mission(&mission, "default", &mut |_| {}).expect("default mission runs");
+    let first = Run::mission(&mission, "default").and_then(Run::execute).expect("default mission runs");
     let r = &first.report;
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert_eq!(r.hazard_contacts, 0);
@@ -16,7 +16,7 @@ fn default_mission_reaches_the_goal_without_hazard_contact_and_is_deterministic(
     assert!(optimal >= r.straight_line_m - 1e-6);
     assert!(r.distance_driven_m >= optimal * 0.95, "drove {} m, optimal {} m", r.distance_driven_m, optimal);
 
-    let second = run_mission(&mission, "default", &mut |_| {}).expect("default mission runs");
+    let second = Run::mission(&mission, "default").and_then(Run::execute).expect("default mission runs");
     let mut a = first.report.clone();
     let mut b = second.report.clone();
     for r in [&mut a, &mut b] {
@@ -34,7 +34,7 @@ fn default_mission_reaches_the_goal_without_hazard_contact_and_is_deterministic(
 fn seed_4_boxed_in_start_squeezes_out_without_contact() {
     let mut mission = Mission::default_mission();
     mission.seed = 4;
-    let run = run_mission(&mission, "default seed 4", &mut |_| {}).expect("mission runs");
+    let run = Run::mission(&mission, "default seed 4").and_then(Run::execute).expect("mission runs");
     let r = &run.report;
     assert!(r.optimal_length_m.is_some(), "seed 4 has a safe path in truth");
     assert_eq!(r.outcome, "reached", "{}", r.message);
@@ -49,7 +49,7 @@ fn navigator_params_from_the_mission_set_roverbug_s_wedge_budget() {
     let mut mission = Mission::default_mission();
     mission.navigator = "roverbug".into();
     mission.navigator_params = [("max_wedges".to_string(), 4.0)].into();
-    let run = run_mission(&mission, "default, 4 wedges", &mut |_| {}).expect("mission runs");
+    let run = Run::mission(&mission, "default, 4 wedges").and_then(Run::execute).expect("mission runs");
     let r = &run.report;
     assert_eq!(r.outcome, "help_requested", "{}", r.message);
     assert!(r.message.contains("wedges sensed"), "{}", r.message);

@@ -5,8 +5,8 @@ mod common;
 
 use rovernav_core::{NavCommand, Point2, Pose3};
 use rovernav_executive::{
-    CycleRecord, Mission, NoObserver, Report, RunObserver, RunOptions, RunOutput, RunSettings,
-    ScriptedOperator, build_world, run_world_with,
+    CycleRecord, Mission, NoObserver, Report, Run, RunObserver, RunOptions, RunOutput, RunSettings,
+    ScriptedOperator, build_world,
 };
 
 /// A 12 m yard; `extra` is appended to the mission text.
@@ -31,9 +31,12 @@ fn run(m: &Mission, script: &[(u64, &str)], observer: &mut dyn RunObserver) -> (
     let world = build_world(m, "test").unwrap();
     let options = RunOptions::of(m, &world);
     let mut op = ScriptedOperator::new(script);
-    let out =
-        run_world_with(world, &RunSettings::of(m), &options, "test", &mut |_| {}, observer, Some(&mut op))
-            .unwrap();
+    let out = Run::new(world, RunSettings::of(m))
+        .options(options)
+        .observer(observer)
+        .operator(&mut op)
+        .execute()
+        .unwrap();
     (out, op)
 }
 

@@ -6,8 +6,7 @@ mod common;
 
 use rovernav_core::{NavCommand, SensorFrame};
 use rovernav_executive::{
-    CycleRecord, Mission, Report, RunObserver, RunOptions, RunSettings, Trace, World, build_world,
-    run_mission_observed, run_world_with,
+    CycleRecord, Mission, Report, Run, RunObserver, RunOptions, RunSettings, Trace, World, build_world,
 };
 use rovernav_terrain::MarsYardParams;
 use rovernav_terrain::procedural::{add_craters, yard_craters};
@@ -52,7 +51,8 @@ impl RunObserver for Log {
 /// Runs the mission and checks what every fault must give; returns the report and the log.
 fn run_and_check_stop(fault: &str, component: &str, kind: &str) -> (Report, Log) {
     let mut log = Log::default();
-    let out = run_mission_observed(&mission_with_fault(fault), "fault-yard", &mut |_| {}, &mut log).unwrap();
+    let out =
+        Run::mission(&mission_with_fault(fault), "fault-yard").unwrap().observer(&mut log).execute().unwrap();
     let r = out.report.clone();
     assert_eq!(r.outcome, "help_requested", "{}", r.message);
     let fault_report = r.fault.clone().expect("fault protection acted");
@@ -172,10 +172,13 @@ y = 20.0
     add_craters(&mut world.terrain.dem, &dropped);
     let options = RunOptions::of(&mission, &world);
     let mut log = Log::default();
-    let r =
-        run_world_with(world, &RunSettings::of(&mission), &options, "trial-5", &mut |_| {}, &mut log, None)
-            .expect("runs")
-            .report;
+    let r = Run::new(world, RunSettings::of(&mission))
+        .options(options)
+        .origin("trial-5")
+        .observer(&mut log)
+        .execute()
+        .expect("runs")
+        .report;
     assert_eq!(r.outcome, "help_requested", "{}", r.message);
     assert_eq!(r.hazard_contacts, 3, "stopped at the third contact: {}", r.message);
     let fault = r.fault.as_ref().expect("a diagnosed fault");

@@ -2,7 +2,7 @@
 //! never enters one, even when it lies across the straight line to the goal.
 
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
-use rovernav_executive::{RunSettings, World, run_world};
+use rovernav_executive::{Run, RunSettings, World};
 use rovernav_navigation::navigator_names;
 use rovernav_sim::SensorModel;
 use rovernav_terrain::{Dem, Terrain};
@@ -45,8 +45,7 @@ fn no_navigator_enters_a_keep_out_zone_across_its_way() {
             name: "keep-out".into(),
             navigator_params: Default::default(),
         };
-        let out =
-            run_world(world, &settings, "keep-out scenario", &mut |_| {}).expect("registered navigator");
+        let out = Run::new(world, settings.clone()).execute().expect("registered navigator");
         for pose in &out.trace.truth {
             assert!(
                 !inside(Point2::new(pose.x, pose.y), &zone),

@@ -12,7 +12,7 @@
 //! `cargo test --release -p rovernav-executive --test local_navigator_scenarios -- --ignored`.
 
 use rovernav_core::{Goal, Grid2, GridGeometry, Point2, Pose2, RoverConfig};
-use rovernav_executive::{Mission, RunOutput, RunSettings, World, build_world, run_world};
+use rovernav_executive::{Mission, Run, RunOutput, RunSettings, World, build_world};
 use rovernav_sim::SensorModel;
 use rovernav_terrain::procedural::add_rocks;
 use rovernav_terrain::{Dem, Rock, Terrain};
@@ -42,8 +42,7 @@ fn world(dem: Dem, rocks: Vec<Rock>, start: Pose2, goal: Point2) -> World {
 }
 
 fn run(world: World, navigator: &str, max_cycles: u64) -> RunOutput {
-    run_world(world, &settings(navigator, max_cycles), "scenario", &mut |_| {})
-        .expect("navigator is registered")
+    Run::new(world, settings(navigator, max_cycles)).execute().expect("navigator is registered")
 }
 
 fn rock(x: f64, y: f64) -> Rock {
@@ -184,7 +183,7 @@ fn local_navigators_make_no_hazard_contact_in_the_mars_yard() {
             mission.seed = seed;
             mission.navigator = navigator.into();
             let w = build_world(&mission, "default").expect("default mission builds");
-            let out = run_world(w, &RunSettings::of(&mission), "default", &mut |_| {}).expect("registered");
+            let out = Run::new(w, RunSettings::of(&mission)).execute().expect("registered");
             let r = &out.report;
             if r.outcome == "reached" {
                 reached += 1;

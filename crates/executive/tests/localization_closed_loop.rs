@@ -8,7 +8,7 @@
 //! make the final estimate worse than dead reckoning by more than a stated bound, and that the
 //! rejected matches are counted rather than used.
 
-use rovernav_executive::{RunSettings, World, run_world};
+use rovernav_executive::{Run, RunSettings, World};
 
 /// A procedural yard `length + 10` m long with the goal `length` m east of the start.
 fn yard(seed: u64, length: f64) -> World {
@@ -25,7 +25,7 @@ fn final_error(world: World, localizer: &str, seed: u64) -> (f64, f64) {
         name: "localization-closed-loop".into(),
         navigator_params: Default::default(),
     };
-    let out = run_world(world, &settings, "localization scenario", &mut |_| {}).expect("registered names");
+    let out = Run::new(world, settings.clone()).execute().expect("registered names");
     (out.report.localization_error_m, out.report.distance_driven_m)
 }
 

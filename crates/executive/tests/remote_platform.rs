@@ -4,10 +4,9 @@
 
 mod common;
 
-use rovernav_executive::remote::{LocalLink, PlatformServer, run_remote};
+use rovernav_executive::remote::{LocalLink, PlatformServer};
 use rovernav_executive::{
-    Mission, NoObserver, Report, RunOptions, RunOutput, RunSettings, ScriptedOperator, build_world,
-    run_world_with,
+    Mission, Report, Run, RunOptions, RunOutput, RunSettings, ScriptedOperator, build_world,
 };
 
 /// A 12 m yard, quick in a debug build, with optional extra TOML (faults).
@@ -24,8 +23,13 @@ fn timeless(r: &Report) -> Report {
 fn single(m: &Mission, operator: Option<&mut ScriptedOperator>) -> RunOutput {
     let world = build_world(m, "test").unwrap();
     let options = RunOptions::of(m, &world);
-    let op = operator.map(|o| o as &mut dyn rovernav_executive::OperatorLink);
-    run_world_with(world, &RunSettings::of(m), &options, "test", &mut |_| {}, &mut NoObserver, op).unwrap()
+    let run = Run::new(world, RunSettings::of(m)).options(options);
+    match operator {
+        Some(op) => run.operator(op),
+        None => run,
+    }
+    .execute()
+    .unwrap()
 }
 
 fn remote(m: &Mission, operator: Option<&mut ScriptedOperator>) -> RunOutput {
@@ -37,9 +41,13 @@ fn remote(m: &Mission, operator: Option<&mut ScriptedOperator>) -> RunOutput {
     let mut options = RunOptions::of(m, &world);
     // The rover side never injects faults: prove the server's schedule alone does it.
     options.faults.clear();
-    let op = operator.map(|o| o as &mut dyn rovernav_executive::OperatorLink);
-    let link = Box::new(LocalLink::new(server));
-    run_remote(world, &RunSettings::of(m), &options, "test", link, &mut |_| {}, op).unwrap()
+    let run = Run::new(world, RunSettings::of(m)).options(options).remote(Box::new(LocalLink::new(server)));
+    match operator {
+        Some(op) => run.operator(op),
+        None => run,
+    }
+    .execute()
+    .unwrap()
 }
 
 #[test]
@@ -84,16 +92,11 @@ fn a_simulator_running_another_seed_is_refused_at_initialization() {
     let world = build_world(&m, "test").unwrap();
     let server = PlatformServer::new(world.clone(), &m.name, 4, Vec::new()).unwrap();
     let options = RunOptions::of(&m, &world);
-    let out = run_remote(
-        world,
-        &RunSettings::of(&m),
-        &options,
-        "test",
-        Box::new(LocalLink::new(server)),
-        &mut |_| {},
-        None,
-    )
-    .unwrap();
+    let out = Run::new(world, RunSettings::of(&m))
+        .options(options)
+        .remote(Box::new(LocalLink::new(server)))
+        .execute()
+        .unwrap();
     let platform = out.report.components.iter().find(|c| c.name == "platform").unwrap();
     assert_eq!(platform.state, "Failure", "{platform:?}");
     assert!(platform.message.contains("seed 4") && platform.message.contains("seed 3"), "{platform:?}");

@@ -3,7 +3,7 @@
 //! of rocks and a goal inside a rock's C-obstacle.
 
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
-use rovernav_executive::{Mission, RunOutput, RunSettings, World, run_mission, run_world};
+use rovernav_executive::{Mission, Run, RunOutput, RunSettings, World};
 use rovernav_sim::SensorModel;
 use rovernav_terrain::procedural::add_rocks;
 use rovernav_terrain::{Dem, Rock, Terrain};
@@ -34,7 +34,7 @@ fn run(size: (f64, f64), rocks: Vec<Rock>, start: Pose2, goal: Point2, tolerance
         name: "roverbug-scenario".into(),
         navigator_params: Default::default(),
     };
-    run_world(world, &settings, "roverbug scenario", &mut |_| {}).expect("run")
+    Run::new(world, settings.clone()).execute().expect("run")
 }
 
 /// Largest distance of a truth-trace point from the segment a-b.
@@ -197,7 +197,8 @@ fn assert_default_yard_seed_reached_clean(seed: u64) -> rovernav_executive::Repo
     let mut mission = Mission::default_mission();
     mission.seed = seed;
     mission.navigator = "roverbug".into();
-    let run = run_mission(&mission, &format!("default seed {seed}"), &mut |_| {}).expect("mission runs");
+    let run =
+        Run::mission(&mission, &format!("default seed {seed}")).and_then(Run::execute).expect("mission runs");
     let r = &run.report;
     assert!(r.optimal_length_m.is_some(), "seed {seed} has a safe path in truth");
     assert_eq!(r.outcome, "reached", "{}", r.message);

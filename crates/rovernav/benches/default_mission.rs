@@ -4,11 +4,12 @@
 //! report reads in metres per second of wall time. The run's own figures are printed too.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use rovernav_executive::{Mission, run_mission};
+use rovernav_executive::{Mission, Run};
 
 fn default_mission(c: &mut Criterion) {
     let mission = Mission::default_mission();
-    let probe = run_mission(&mission, "default", &mut |_| {}).expect("default mission runs");
+    let run = || Run::mission(&mission, "default").and_then(Run::execute).expect("default mission runs");
+    let probe = run();
     let metres = probe.report.distance_driven_m;
     println!(
         "default mission: {} after {:.1} m driven, {:.0} s simulated, {:.2} s wall ({:.1} simulated m per wall s)",
@@ -21,9 +22,7 @@ fn default_mission(c: &mut Criterion) {
     let mut group = c.benchmark_group("traverse");
     group.sample_size(10);
     group.throughput(Throughput::Elements(metres.round().max(1.0) as u64));
-    group.bench_function("default_mission_metres", |b| {
-        b.iter(|| run_mission(&mission, "default", &mut |_| {}).expect("default mission runs"))
-    });
+    group.bench_function("default_mission_metres", |b| b.iter(run));
     group.finish();
 }
 

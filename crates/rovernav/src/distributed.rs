@@ -157,9 +157,9 @@ mod with {
     use rovernav_executive::messages::topics;
     use rovernav_executive::remote::{
         LinkError, PLATFORM_REPLY, PLATFORM_REQUEST, PlatformLink, PlatformReply, PlatformRequest,
-        PlatformServer, run_remote_logged,
+        PlatformServer,
     };
-    use rovernav_executive::{Mission, OperatorLink, RunOptions, RunSettings, build_world};
+    use rovernav_executive::{Mission, OperatorLink, Run, RunOptions, RunSettings, build_world};
     use std::collections::VecDeque;
     use std::path::PathBuf;
     use std::sync::{Arc, Mutex, MutexGuard};
@@ -368,16 +368,13 @@ mod with {
             ZenohOperator { transport: Arc::clone(&shared), commands, pending: VecDeque::new() };
         // The rover process logs its own bus (no truth lives here) and the final report.
         let mut log = crate::output::RunLog::open(&out_dir)?;
-        let output = run_remote_logged(
-            world,
-            &RunSettings::of(&mission),
-            &options,
-            &origin_of_navigator,
-            Box::new(link),
-            &mut |_| {},
-            Some(&mut operator),
-            &mut log.recorder,
-        );
+        let output = Run::new(world, RunSettings::of(&mission))
+            .options(options)
+            .origin(&origin_of_navigator)
+            .remote(Box::new(link))
+            .operator(&mut operator)
+            .observer(&mut log.recorder)
+            .execute();
         log.close(output.is_ok())?;
         let output = output?;
         lock(&shared).publish(PLATFORM_DONE.name(), &encode(&PLATFORM_DONE, &output.report.cycles)?)?;

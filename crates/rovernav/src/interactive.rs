@@ -10,7 +10,7 @@
 //! waiting one is aborted. Banner and progress go to standard error.
 
 use crate::RunArgs;
-use rovernav_executive::{OperatorLink, run_mission_with};
+use rovernav_executive::{OperatorLink, Run};
 use std::io::{BufRead, Write};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
 use std::time::Duration;
@@ -83,8 +83,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     );
     let mut link = StdinLink::spawn();
     let mut log = crate::output::RunLog::open(&out_dir)?;
-    let output =
-        run_mission_with(&mission, &origin_of_navigator, &mut |_| {}, &mut log.recorder, Some(&mut link));
+    let output = Run::mission(&mission, &origin_of_navigator)
+        .and_then(|run| run.observer(&mut log.recorder).operator(&mut link).execute());
     log.close(output.is_ok())?;
     let output = output?;
     crate::output::write_run_outputs(&out_dir, &output)?;

@@ -9,6 +9,7 @@ mod eval_science;
 mod eval_stereo;
 mod eval_terrain;
 mod eval_vtt;
+mod graph_cmd;
 mod interactive;
 mod output;
 mod render_cmd;
@@ -18,7 +19,7 @@ mod stereo_cmd;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use rovernav_executive::{Mission, run_mission_observed};
+use rovernav_executive::{Mission, Run};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -46,6 +47,8 @@ enum Command {
     Navigators(NavigatorsArgs),
     /// Campaigns: every navigator on the same generated terrains, with a results table and plots.
     Campaign(campaign::CampaignArgs),
+    /// The component graph a mission's run steps: components, rates, topics, step order (--dot, --json).
+    Graph(graph_cmd::GraphArgs),
     /// The simulator as its own process, serving a rover over zenoh (feature `zenoh`).
     Sim(distributed::SimArgs),
     /// The autonomy as its own process, driving a simulator over zenoh (feature `zenoh`).
@@ -211,6 +214,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Science(args))) => eval_science::run(args),
         Some(Command::Eval(EvalCommand::Vtt(args))) => eval_vtt::run(args),
         Some(Command::Navigators(args)) => navigators(args),
+        Some(Command::Graph(args)) => graph_cmd::run(args),
         Some(Command::Campaign(args)) => campaign::run(args),
         Some(Command::Sim(args)) => distributed::sim(args),
         Some(Command::Rover(args)) => distributed::rover(args),
@@ -285,7 +289,8 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
     };
     // Every topic of the run goes to telemetry.mcap; finished even when the run fails.
     let mut log = output::RunLog::open(&out_dir)?;
-    let output = run_mission_observed(&mission, &origin_of_navigator, &mut on_progress, &mut log.recorder);
+    let output = Run::mission(&mission, &origin_of_navigator)
+        .and_then(|run| run.progress(&mut on_progress).observer(&mut log.recorder).execute());
     bar.finish_and_clear();
     log.close(output.is_ok())?;
     let output = output?;
