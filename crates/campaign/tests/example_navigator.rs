@@ -5,7 +5,7 @@
 mod navigator;
 
 use rovernav_campaign::{CampaignSpec, Plan};
-use rovernav_executive::{Mission, run_mission};
+use rovernav_executive::{Mission, Run};
 use rovernav_navigation::{Registry, registry};
 
 #[test]
@@ -16,7 +16,7 @@ fn the_example_navigator_registers_with_one_line_and_runs_a_mission_and_a_campai
         .replace("navigator = \"astar-grid\"", "navigator = \"straight-line\"")
         .replace("rock_abundance = 0.16", "rock_abundance = 0.0");
     let mission = Mission::from_toml(&text, "straight-line mission").unwrap();
-    let out = run_mission(&mission, "straight-line mission", &mut |_| {}).unwrap();
+    let out = Run::mission(&mission, "straight-line mission").and_then(Run::execute).unwrap();
     assert_eq!(out.report.navigator, "straight-line");
     assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
     // It drove straight from (5, 5) toward (20, 20): its true path is no shorter than the line

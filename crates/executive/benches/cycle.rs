@@ -23,7 +23,7 @@ fn direct_cycles(world: &World, mission: &Mission) -> (Duration, u64) {
     let mut navigator =
         rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).expect("registered");
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let mut localizer = rovernav_localization::localizer_by_name(&mission.localizer, &world.rover, initial)
+    let mut localizer = rovernav_navigation::localizer_by_name(&mission.localizer, &world.rover, initial)
         .expect("registered");
     let mut sim = Simulator::new(
         world.terrain.clone(),
