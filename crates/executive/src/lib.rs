@@ -41,6 +41,6 @@ pub use report::{
 };
 pub use run::{
     BusKind, CycleRecord, NoObserver, Progress, Run, RunError, RunObserver, RunOptions, RunOutput,
-    RunSettings, Trace,
+    RunSettings, Trace, run_mission,
 };
 pub use world::{World, WorldError, build_world, long_yard_world};

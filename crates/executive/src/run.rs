@@ -222,6 +222,16 @@ impl RunOptions {
     }
 }
 
+/// Runs a mission to completion with a progress callback: `Run::mission(mission, origin)`,
+/// `.progress(on_progress).execute()`, kept for callers not yet moved to [`Run`].
+pub fn run_mission(
+    mission: &Mission,
+    origin: &str,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<RunOutput, RunError> {
+    Run::mission(mission, origin)?.progress(on_progress).execute()
+}
+
 /// A run, configured step by step and then executed: the one entry point of every run, in
 /// process or against a remote platform.
 ///
