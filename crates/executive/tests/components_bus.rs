@@ -47,8 +47,7 @@ struct Reference {
 fn direct_loop(world: &World, s: &RunSettings) -> Reference {
     let mut navigator = rovernav_navigation::navigator_by_name(&s.navigator, &world.rover).unwrap();
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let mut localizer =
-        rovernav_navigation::localizer_by_name(&s.localizer, &world.rover, initial).unwrap();
+    let mut localizer = rovernav_navigation::localizer_by_name(&s.localizer, &world.rover, initial).unwrap();
     let mut sim = Simulator::new(
         world.terrain.clone(),
         world.rover.clone(),
