@@ -194,6 +194,10 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
         waypoints: mission.goal.waypoints.iter().map(spec_to_local).collect(),
         keep_out: mission.goal.keep_out.iter().map(|z| z.iter().map(spec_to_local).collect()).collect(),
     };
+    // The sky's clouds and dust devils, placed from the start on its ground.
+    let ground_z = terrain.dem.height(start_xy.x, start_xy.y).unwrap_or(0.0);
+    sensor_model.navcam.volumes =
+        mission.sky.iter().map(|s| s.volume(start_xy.x, start_xy.y, ground_z)).collect();
     Ok(World {
         terrain,
         rover,

@@ -6,12 +6,14 @@
 mod faults;
 mod route;
 mod sensors;
+mod sky;
 mod tasks;
 mod terrain;
 
 pub use faults::{FaultKindName, FaultSpec, SensorName, Side};
 pub use route::{GoalSpec, PoseSpec};
 pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
+pub use sky::{SkyKind, SkySpec};
 pub use tasks::{TaskKindName, TaskSpecToml};
 pub use terrain::TerrainSpec;
 
@@ -74,6 +76,9 @@ pub struct Mission {
     /// Faults the simulator injects (`[[faults]]`), for fault-protection tests and drills.
     #[serde(default)]
     pub faults: Vec<FaultSpec>,
+    /// Clouds and dust devils in the simulated sky (`[[sky]]`).
+    #[serde(default)]
+    pub sky: Vec<SkySpec>,
     /// Folder the mission file was read from (relative DEM paths resolve against it first).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -274,6 +279,9 @@ impl Mission {
             return bad(&field, &why);
         }
         if let Err((field, why)) = faults::check(&self.faults) {
+            return bad(&field, why);
+        }
+        if let Err((field, why)) = sky::check(&self.sky) {
             return bad(&field, why);
         }
         Ok(())
