@@ -230,18 +230,7 @@ fn score_clouds(args: &EvalScienceArgs, sites: &[Site]) -> anyhow::Result<Vec<Sc
                     d.regions.first().map(|r| (r.strength, r.contrast, r.x, r.y))
                 );
             }
-            let events = if d.cloud {
-                d.regions
-                    .iter()
-                    .map(|r| Event {
-                        kind: EventKind::Cloud,
-                        bbox: [r.x, r.y, r.width, r.height],
-                        score: r.strength,
-                    })
-                    .collect()
-            } else {
-                vec![]
-            };
+            let events = d.events();
             Ok(Scored {
                 truth: case.truth.cloud,
                 found: d.cloud && hit,

@@ -33,7 +33,7 @@ use rovernav_vision::camera::CameraModel;
 use rovernav_vision::image::GreyF32;
 use rovernav_vision::rig::Rig;
 use rovernav_vision::tracking::approach::grey_f32;
-use rovernav_vision::tracking::{Approach, ApproachError, ApproachParams, Decision, Designation, NavcamPair};
+use rovernav_vision::tracking::{Approach, ApproachParams, Decision, Designation, NavcamPair};
 use serde::Serialize;
 
 /// Rock abundance of the evaluation's yards (the default mission's is 0.16).
@@ -446,17 +446,17 @@ fn approach(
         designated_surface(&rig, world, &base_field, &sim.truth(), &setup.aim).unwrap_or(setup.aim);
     loop {
         let estimate = localizer.estimate().pose;
+        // An approach that stops before arriving: where the rover is and why.
+        let stopped = |sim: &Simulator, why: String, tracked, occluded: bool| RunEnd {
+            truth: sim.truth(),
+            end: why,
+            tracked,
+            occluded,
+            drift_m: f64::NAN,
+        };
         let decision = match vtt.decide(&estimate) {
             Ok(d) => d,
-            Err(e) => {
-                return Ok(RunEnd {
-                    truth: sim.truth(),
-                    end: e.to_string(),
-                    tracked,
-                    occluded: occluded.is_some(),
-                    drift_m: f64::NAN,
-                });
-            }
+            Err(e) => return Ok(stopped(&sim, e.to_string(), tracked, occluded.is_some())),
         };
         let Decision::Move { turn_rad, distance_m, .. } = decision else {
             let drift = vtt.target().zip(last_pointing).and_then(|(t, (pan, tilt))| {
@@ -489,24 +489,7 @@ fn approach(
         let pair = NavcamPair { left: &l, right: &r, pan: p, tilt: t };
         match vtt.observe(&pair, &localizer.estimate().pose) {
             Ok(_) => tracked += 1,
-            Err(e @ (ApproachError::Lost(_) | ApproachError::NoRange(_))) => {
-                return Ok(RunEnd {
-                    truth: sim.truth(),
-                    end: e.to_string(),
-                    tracked,
-                    occluded: occluded.is_some(),
-                    drift_m: f64::NAN,
-                });
-            }
-            Err(e) => {
-                return Ok(RunEnd {
-                    truth: sim.truth(),
-                    end: e.to_string(),
-                    tracked,
-                    occluded: occluded.is_some(),
-                    drift_m: f64::NAN,
-                });
-            }
+            Err(e) => return Ok(stopped(&sim, e.to_string(), tracked, occluded.is_some())),
         }
     }
 }

@@ -110,6 +110,23 @@ pub struct CloudDetection {
     pub sky_fraction: f32,
 }
 
+impl CloudDetection {
+    /// The detection's regions as triage events (none when the image is judged cloud-free).
+    pub fn events(&self) -> Vec<crate::triage::Event> {
+        if !self.cloud {
+            return Vec::new();
+        }
+        self.regions
+            .iter()
+            .map(|r| crate::triage::Event {
+                kind: crate::triage::EventKind::Cloud,
+                bbox: [r.x, r.y, r.width, r.height],
+                score: r.strength,
+            })
+            .collect()
+    }
+}
+
 /// Detects clouds in `image` inside the sky of `sky`.
 pub fn detect_clouds(image: &GreyF32, sky: &SkyMask, params: &CloudParams) -> CloudDetection {
     let none = |sky_fraction| CloudDetection { cloud: false, confidence: 0.0, regions: vec![], sky_fraction };

@@ -163,19 +163,7 @@ impl Watch {
         let events = match self.kind {
             WatchKind::Clouds => {
                 let sky = segment_sky(&grey, &SkyParams::default());
-                let d = detect_clouds(&grey, &sky, &CloudParams::default());
-                if d.cloud {
-                    d.regions
-                        .iter()
-                        .map(|r| Event {
-                            kind: EventKind::Cloud,
-                            bbox: [r.x, r.y, r.width, r.height],
-                            score: r.strength,
-                        })
-                        .collect()
-                } else {
-                    Vec::new()
-                }
+                detect_clouds(&grey, &sky, &CloudParams::default()).events()
             }
             WatchKind::DustDevils => {
                 self.frames.push(grey);
