@@ -41,9 +41,18 @@ pub fn param_info<C>(mut defaults: C, table: Vec<Param<C>>) -> Vec<ParamInfo> {
             name: p.name,
             unit: p.unit.label(),
             doc: p.doc,
-            default: value(&mut defaults, p),
+            default: to_twelve_digits(value(&mut defaults, p)),
         })
         .collect()
+}
+
+/// `x` rounded to twelve significant digits: a default stored in radians and listed in degrees
+/// reads 30, not 29.999999999999996.
+fn to_twelve_digits(x: f64) -> f64 {
+    if !x.is_finite() || x == 0.0 {
+        return x;
+    }
+    format!("{x:.11e}").parse().unwrap_or(x)
 }
 
 /// A global planner a navigator can run under, and the label of that combination.

@@ -166,3 +166,17 @@ fn map_matching_localizers_decorate_the_navigator_with_the_look_back() {
     assert_eq!(r.decorated("warp-drive", "ekf-ml"), "warp-drive");
     assert_eq!(r.decorated("grid", "dead-reckoning"), "astar-grid");
 }
+
+#[test]
+fn listed_defaults_read_as_written_in_degrees() {
+    let r = Registry::builtin();
+    let sr2 = r.navigators().iter().find(|e| e.name == "sr2").expect("sr2 is registered");
+    let params = (sr2.params)();
+    let get = |name: &str| params.iter().find(|p| p.name == name).map(|p| p.default);
+    // Stored in radians, listed in degrees: the listing shows the round figure of the paper.
+    assert_eq!(get("side_rotation_deg"), Some(30.0));
+    assert_eq!(get("middle_rotation_deg"), Some(60.0));
+    assert_eq!(get("max_tilt_deg"), Some(15.0));
+    assert_eq!(to_twelve_digits(0.1 + 0.2), 0.3);
+    assert_eq!(to_twelve_digits(-2.5e-7), -2.5e-7);
+}
