@@ -350,8 +350,8 @@ impl CampaignSpec {
         if let Err(e) = registry.check_localizer(&self.localizer, &Default::default()) {
             return bad("localizer", e.to_string());
         }
-        if !positive(self.time_limit_s) {
-            return bad("time_limit_s", "must be a positive number of seconds".into());
+        if let Err(why) = rovernav_executive::mission::check::positive_up_to(self.time_limit_s, 1.0e7, " s") {
+            return bad("time_limit_s", why);
         }
         if self.max_cycles == 0 {
             return bad("max_cycles", "must be at least 1".into());
@@ -375,10 +375,12 @@ impl CampaignSpec {
         )?;
         check_draw(&y.slope_deg, "yard.slope_deg", origin, |v| v.abs() < 45.0, "(-45, 45) deg")?;
         check_draw(&y.relief_m, "yard.relief_m", origin, |v| (0.0..=100.0).contains(&v), "[0, 100] m")?;
+        // The checks a mission's fields get (rovernav_executive::mission::check).
+        use rovernav_executive::mission::check;
         if let Some(c) = y.craters_per_hectare
-            && !(c.is_finite() && c >= 0.0)
+            && let Err(why) = check::craters_per_hectare(c, y.size_m)
         {
-            return bad("yard.craters_per_hectare", "must be a non-negative number".into());
+            return bad("yard.craters_per_hectare", why);
         }
         // Keep the start and goal pads (radius 1 m) inside the yard.
         for (field, p) in [("yard.start", y.start_xy()), ("yard.goal", y.goal_xy())] {
@@ -392,8 +394,8 @@ impl CampaignSpec {
         if !y.start_yaw_deg.is_finite() {
             return bad("yard.start_yaw_deg", "must be a finite number".into());
         }
-        if !positive(y.goal_tolerance_m) {
-            return bad("yard.goal_tolerance_m", "must be positive".into());
+        if let Err(why) = check::tolerance(y.goal_tolerance_m) {
+            return bad("yard.goal_tolerance_m", why);
         }
         for (i, d) in self.dem.iter().enumerate() {
             if d.trials == 0 || d.trials > 10_000 {
@@ -514,6 +516,9 @@ mod tests {
             ("first_terrain_seed = 4294967290\ntrials = 7", "first_terrain_seed"),
             ("first_terrain_seed = 4294967295\ntrials = 2", "first_terrain_seed"),
             ("[[dem]]\nmission = \"m.toml\"\ntrials = 0", "dem[0].trials"),
+            ("[yard]\ncraters_per_hectare = 1e9", "yard.craters_per_hectare"),
+            ("[yard]\ngoal_tolerance_m = 1e308", "yard.goal_tolerance_m"),
+            ("time_limit_s = nan", "time_limit_s"),
         ] {
             let e = err(text);
             assert!(e.contains("c.toml") && e.contains(&format!("`{field}`")), "{text}: {e}");

@@ -9,6 +9,7 @@
 
 pub mod geometry;
 pub mod grid;
+pub mod limits;
 pub mod nav;
 pub mod rover;
 pub mod sensors;

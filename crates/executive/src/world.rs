@@ -135,6 +135,12 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
         }
         TerrainSpec::Dem { path, region, resolution_m, rock_abundance } => {
             let file = resolve_data_path(mission, path);
+            // A FIFO, device or folder would block or fail obscurely in the reader.
+            if let Ok(meta) = std::fs::metadata(&file)
+                && !meta.is_file()
+            {
+                return Err(invalid("terrain.path", format!("{} is not a regular file", file.display())));
+            }
             let dem = rovernav_terrain::io::load_geotiff(&file)
                 .map_err(|e| WorldError::Dem { origin: origin.into(), message: e.to_string() })?;
             let g = *dem.geometry();
@@ -188,10 +194,19 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
         let (x, y) = if mission.goal.easting.is_some() { to_local(v[0], v[1]) } else { (v[0], v[1]) };
         Point2::new(x, y)
     };
+    let waypoints: Vec<Point2> = mission.goal.waypoints.iter().map(spec_to_local).collect();
+    for (i, p) in waypoints.iter().enumerate() {
+        if terrain.dem.height(p.x, p.y).is_none() {
+            return Err(invalid(
+                &format!("goal.waypoints[{i}]"),
+                format!("({:.2}, {:.2}) is outside the terrain or has no elevation data", p.x, p.y),
+            ));
+        }
+    }
     let goal = Goal {
         position: goal_xy,
         tolerance: mission.goal.tolerance_m,
-        waypoints: mission.goal.waypoints.iter().map(spec_to_local).collect(),
+        waypoints,
         keep_out: mission.goal.keep_out.iter().map(|z| z.iter().map(spec_to_local).collect()).collect(),
     };
     // The sky's clouds and dust devils, placed from the start on its ground.

@@ -106,7 +106,12 @@ pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
     }
     let height = height.ok_or_else(|| ParseError::at_line(map_line, "`map` before `height N`"))?;
     let width = width.ok_or_else(|| ParseError::at_line(map_line, "`map` before `width N`"))?;
-    let mut blocked = Vec::with_capacity(width * height);
+    // Each cell is one character of the text: a header promising more cells than the text holds
+    // is refused before allocating.
+    let cells =
+        rovernav_core::limits::checked_elements(&[height as u64, width as u64], 1, Some(text.len() as u64))
+            .map_err(|why| ParseError::at_line(map_line, format!("map {why}")))?;
+    let mut blocked = Vec::with_capacity(cells);
     let mut rows = 0;
     for (n, line) in lines {
         if rows == height {
@@ -164,9 +169,13 @@ pub fn parse_scenarios(text: &str) -> Result<Vec<Scenario>, ParseError> {
                 ParseError::at_line(n, format!("field {name}: expected an integer, got `{}`", fields[k]))
             })
         };
-        let optimal = fields[8].parse::<f64>().map_err(|_| {
-            ParseError::at_line(n, format!("field optimal: expected a number, got `{}`", fields[8]))
-        })?;
+        let optimal =
+            fields[8].parse::<f64>().ok().filter(|v| v.is_finite() && *v >= 0.0).ok_or_else(|| {
+                ParseError::at_line(
+                    n,
+                    format!("field optimal: expected a finite length >= 0, got `{}`", fields[8]),
+                )
+            })?;
         out.push(Scenario {
             bucket: int(0, "bucket")? as u32,
             map: fields[1].to_string(),
@@ -177,6 +186,9 @@ pub fn parse_scenarios(text: &str) -> Result<Vec<Scenario>, ParseError> {
             optimal,
             line: n,
         });
+    }
+    if out.is_empty() {
+        return Err(ParseError::whole("no scenario (an empty `.scen` file)"));
     }
     Ok(out)
 }
@@ -205,6 +217,27 @@ pub fn check_scenarios(map: &MovingAiMap, scenarios: &[Scenario]) -> Result<(), 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_map_header_larger_than_its_file_is_refused_before_allocating() {
+        let e = parse_map("type octile\nheight 1000000\nwidth 1000000\nmap\n..\n").unwrap_err();
+        assert!(e.to_string().contains("line 4") && e.to_string().contains("input holds"), "{e}");
+    }
+
+    #[test]
+    fn an_empty_scenario_file_is_refused() {
+        let e = parse_scenarios("version 1\n").unwrap_err();
+        assert!(e.to_string().contains("no scenario"), "{e}");
+    }
+
+    #[test]
+    fn a_nan_or_negative_optimum_is_refused() {
+        for bad in ["nan", "inf", "-1"] {
+            let text = format!("version 1\n0\ta.map\t3\t2\t0\t0\t1\t0\t{bad}\n");
+            let e = parse_scenarios(&text).unwrap_err();
+            assert!(e.to_string().contains("line 2") && e.to_string().contains("optimal"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn parses_a_small_map_with_crlf() {

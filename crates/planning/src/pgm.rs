@@ -75,13 +75,10 @@ pub fn parse_pgm(bytes: &[u8]) -> Result<Pgm, ParseError> {
         return Err(ParseError::at_line(h.line, "expected whitespace after maxval"));
     }
     let data = &bytes[h.pos + 1..];
-    let n = width * height;
-    if data.len() < n {
-        return Err(ParseError::whole(format!(
-            "pixel data has {} bytes, expected {width}x{height} = {n}",
-            data.len()
-        )));
-    }
+    // The product is checked (it may wrap) against the pixel bytes present before allocating.
+    let n =
+        rovernav_core::limits::checked_elements(&[width as u64, height as u64], 1, Some(data.len() as u64))
+            .map_err(|why| ParseError::whole(format!("pixel data: image {why}")))?;
     Ok(Pgm { width, height, maxval: maxval as u32, pixels: data[..n].to_vec() })
 }
 
@@ -111,6 +108,18 @@ mod tests {
     use crate::Cell;
 
     #[test]
+    fn a_pgm_whose_size_wraps_is_refused() {
+        let mut bytes = b"P5\n4294967296 4294967296\n255\n".to_vec();
+        bytes.extend_from_slice(&[1; 16]);
+        let e = parse_pgm(&bytes).unwrap_err().to_string();
+        assert!(e.contains("overflows"), "{e}");
+        let mut bytes = b"P5\n100000 100000\n255\n".to_vec();
+        bytes.extend_from_slice(&[1; 16]);
+        let e = parse_pgm(&bytes).unwrap_err().to_string();
+        assert!(e.contains("input holds 16"), "{e}");
+    }
+
+    #[test]
     fn parses_header_with_comments() {
         let mut bytes = b"P5\n# a comment\n3 2 # trailing\n255\n".to_vec();
         bytes.extend_from_slice(&[1, 2, 255, 4, 5, 6]);
@@ -128,7 +137,7 @@ mod tests {
         assert_eq!(e.line, Some(3));
         assert!(parse_pgm(b"P5\n2 2\n65535\n").is_err());
         let e = parse_pgm(b"P5\n2 2\n255\n\x01\x01").unwrap_err();
-        assert!(e.message.contains("expected 2x2"));
+        assert!(e.message.contains("2 x 2 needs 4 bytes but the input holds 2"), "{}", e.message);
         assert!(parse_cost_map(b"P5\n1 1\n255\n\x00").is_err());
     }
 }

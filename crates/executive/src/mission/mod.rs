@@ -3,6 +3,7 @@
 //! Unknown fields are rejected so that a misspelt key is an error naming the key and its line,
 //! not a silently ignored setting.
 
+pub mod check;
 mod faults;
 mod route;
 mod sensors;
@@ -220,12 +221,25 @@ impl Mission {
         let bad = |field: &str, message: &str| {
             Err(MissionError::Invalid { path: origin.into(), field: field.into(), message: message.into() })
         };
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        if !positive(self.time_limit_s) {
-            return bad("time_limit_s", "must be a positive number of seconds");
+        if let Err(why) = check::output_name(&self.name) {
+            return bad("name", &why);
+        }
+        if let Err(why) = check::positive_up_to(self.time_limit_s, 1.0e7, " s") {
+            return bad("time_limit_s", &why);
+        }
+        if !(1..=10_000_000).contains(&self.max_cycles) {
+            return bad("max_cycles", "must be in [1, 10000000]");
         }
         if let Err((field, why)) = self.terrain.check() {
             return bad(field, why);
+        }
+        if let TerrainSpec::Procedural { craters_per_hectare: Some(c), size_m, .. } = &self.terrain
+            && let Err(why) = check::craters_per_hectare(*c, *size_m)
+        {
+            return bad("terrain.craters_per_hectare", &why);
+        }
+        if let Err((field, why)) = self.rover.check() {
+            return bad(&format!("rover.{field}"), &why);
         }
         for (name, spec) in [
             ("start", (&self.start.x, &self.start.y, &self.start.easting, &self.start.northing)),
@@ -240,8 +254,8 @@ impl Mission {
                     "give either x and y (local metres) or easting and northing (projected metres)",
                 );
             }
-            if [x, y, e, n].iter().any(|v| v.is_some_and(|v| !v.is_finite())) {
-                return bad(name, "coordinates must be finite numbers");
+            if let Some(why) = [x, y, e, n].iter().find_map(|v| v.and_then(|v| check::coordinate(v).err())) {
+                return bad(name, &format!("coordinates {why}"));
             }
         }
         if !self.start.yaw_deg.is_finite() {
@@ -250,8 +264,13 @@ impl Mission {
         if let Err((field, why)) = self.sensors.check() {
             return bad(&format!("sensors.{field}"), why);
         }
-        if !positive(self.goal.tolerance_m) {
-            return bad("goal.tolerance_m", "must be positive");
+        if let Err(why) = check::tolerance(self.goal.tolerance_m) {
+            return bad("goal.tolerance_m", &why);
+        }
+        for (i, w) in self.goal.waypoints.iter().enumerate() {
+            if let Some(why) = w.iter().find_map(|v| check::coordinate(*v).err()) {
+                return bad(&format!("goal.waypoints[{i}]"), &format!("coordinates {why}"));
+            }
         }
         // An unknown navigator or localiser name is the run's error (it lists the registered
         // ones).
@@ -273,6 +292,9 @@ impl Mission {
         for (i, zone) in self.goal.keep_out.iter().enumerate() {
             if zone.len() < 3 {
                 return bad(&format!("goal.keep_out[{i}]"), "a polygon needs at least 3 vertices");
+            }
+            if let Some(why) = zone.iter().flatten().find_map(|v| check::coordinate(*v).err()) {
+                return bad(&format!("goal.keep_out[{i}]"), &format!("vertex coordinates {why}"));
             }
         }
         if let Err((field, why)) = tasks::check(self) {

@@ -59,7 +59,6 @@ pub struct TaskSpecToml {
 /// The first `[[tasks]]` entry that does not make sense, as (field, why); parallel tasks must
 /// need different resources.
 pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
-    let positive = |v: f64| v.is_finite() && v > 0.0;
     for (i, t) in mission.tasks.iter().enumerate() {
         let field = |name: &str| format!("tasks[{i}].{name}");
         let has_target = t.x.is_some() || t.y.is_some();
@@ -105,8 +104,8 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
             if t.kind != TaskKindName::DriveTo {
                 return Err((field("tolerance_m"), "only a drive_to has an arrival tolerance".into()));
             }
-            if !positive(tol) {
-                return Err((field("tolerance_m"), "must be positive".into()));
+            if let Err(why) = super::check::tolerance(tol) {
+                return Err((field("tolerance_m"), why));
             }
         }
     }
