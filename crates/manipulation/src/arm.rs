@@ -16,18 +16,18 @@
 //! - joints 2-4 are parallel pitch axes perpendicular to the arm's vertical plane: upper arm
 //!   0.35 m, forearm 0.35 m, wrist link 0.10 m to the turret centre;
 //! - joint 5 turns the turret about the wrist link; the instrument points perpendicular to the
-//!   wrist link and its contact face is 0.12 m from the turret centre. The approach direction is
+//!   wrist link and its contact face is 0.15 m from the turret centre. The approach direction is
 //!   therefore free in two angles, the tool's roll about its own axis is not (no instrument here
 //!   needs it);
-//! - reach: the contact face reaches 0.75 m horizontally from the azimuth axis on level ground
-//!   with a vertical approach (1.25 m ahead of the body centre, 0.85 m ahead of the body);
+//! - reach: the contact face reaches 0.785 m horizontally from the azimuth axis on level ground
+//!   with a vertical approach (1.28 m ahead of the body centre, 0.88 m ahead of the body);
 //! - joint limits: azimuth -100..100 deg, shoulder -40..110 deg, elbow -175..-5 deg (the elbow
 //!   bends one way, elbow up), wrist and turret -180..180 deg. These are this project's figures
 //!   chosen for the stowed pose and elbow-up work, not the flight values (not published in the
 //!   sources above).
 //!
 //! Collision model: capsules for the upper arm, forearm, wrist link and instrument, a sphere for
-//! the turret; boxes for the rover (body, deck, wheels, Hazcam bar, arm bracket). Adjacent links
+//! the turret (a 5 cm sphere); boxes for the rover (body, deck, wheels, Hazcam bar, arm bracket). Adjacent links
 //! are not checked against each other (their joint keeps them apart).
 //!
 //! Kinematics are written by hand rather than with the `k` crate: `k` 0.32 pulls a second
@@ -68,9 +68,9 @@ impl Default for ArmGeometry {
             upper: 0.35,
             fore: 0.35,
             wrist: 0.10,
-            tool: 0.12,
+            tool: 0.15,
             limits: [(d(-100.0), d(100.0)), (d(-40.0), d(110.0)), (d(-175.0), d(-5.0)), (-PI, PI), (-PI, PI)],
-            radii: [0.03, 0.025, 0.03, 0.06, 0.02],
+            radii: [0.03, 0.025, 0.03, 0.05, 0.02],
         }
     }
 }
@@ -142,17 +142,30 @@ impl Arm {
     }
 
     /// The stowed-for-driving pose: arm pointing left across the front, forearm folded back
-    /// under it, turret right of the shoulder with the instrument pointing up.
+    /// under it, turret right of the shoulder with the instrument pointing forward.
     pub fn stowed(&self) -> Joints {
         let d = f64::to_radians;
-        [d(90.0), 0.0, d(-170.0), d(-10.0), 0.0]
+        [d(90.0), 0.0, d(-170.0), d(-10.0), d(-90.0)]
     }
 
-    /// The unstowed pose for a work azimuth (rad): upper arm raised 60 deg, forearm hanging
-    /// down, wrist link forward, instrument pointing up.
+    /// The unstowed pose for a work azimuth (rad): upper arm raised 60 deg, forearm reaching
+    /// forward and down, wrist link pointing back and instrument across the arm as when stowed. From the stowed pose only
+    /// the shoulder, elbow and wrist move, keeping the wrist link's direction.
     pub fn unstowed(&self, azimuth: f64) -> Joints {
         let d = f64::to_radians;
-        [azimuth, d(60.0), d(-150.0), d(90.0), PI]
+        [azimuth, d(60.0), d(-130.0), d(-110.0), d(-90.0)]
+    }
+
+    /// The stow volume: the box around the stowed arm grown by 3 cm. It holds no terrain: the
+    /// rover drives with the arm in it, and terrain there would have met the arm.
+    pub fn stow_volume(&self) -> Aabb {
+        let mut b = Aabb { min: V3::repeat(f64::INFINITY), max: V3::repeat(f64::NEG_INFINITY) };
+        for c in self.capsules(&self.stowed()) {
+            let r = V3::repeat(c.radius + 0.03);
+            b.min = b.min.inf(&(c.a.inf(&c.b) - r));
+            b.max = b.max.sup(&(c.a.sup(&c.b) + r));
+        }
+        b
     }
 
     /// Whether every joint is within its limits.
@@ -218,8 +231,7 @@ impl Arm {
                 }
             }
         }
-        let cost = |q: &Joints| q.iter().zip(prefer).map(|(a, b)| wrap(a - b).abs()).sum::<f64>();
-        out.sort_by(|x, y| cost(x).total_cmp(&cost(y)));
+        out.sort_by(|x, y| cost_between(x, prefer).total_cmp(&cost_between(y, prefer)));
         out.dedup_by(|x, y| cost_between(x, y) < 1e-9);
         out
     }
@@ -255,9 +267,9 @@ impl Arm {
     }
 }
 
-/// Sum of wrapped joint differences.
+/// Sum of joint differences (joints move within their limits, never through +-180 deg).
 pub fn cost_between(x: &Joints, y: &Joints) -> f64 {
-    x.iter().zip(y).map(|(a, b)| wrap(a - b).abs()).sum()
+    x.iter().zip(y).map(|(a, b)| (a - b).abs()).sum()
 }
 
 /// The largest distance any arm point moves per radian of each joint at this pose (m/rad): a
@@ -300,7 +312,7 @@ mod tests {
             x += 0.005;
         }
         let reach = x - arm.geometry.base.x;
-        assert!((0.73..0.78).contains(&reach), "reach {reach}");
+        assert!((0.76..0.80).contains(&reach), "reach {reach}");
     }
 
     proptest! {

@@ -11,5 +11,12 @@
 //! - [`autoplace`]: the whole decision: placed, or refused with its reason.
 
 pub mod arm;
+pub mod autoplace;
+pub mod feasibility;
 pub mod geometry;
 pub mod octree;
+pub mod targets;
+
+pub use arm::{Arm, ArmGeometry, Joints};
+pub use autoplace::{AutoPlaceParams, Outcome, Reason, autoplace, terrain_model};
+pub use octree::{Cell, Octree, OctreeParams, View};
