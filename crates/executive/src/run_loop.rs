@@ -258,7 +258,11 @@ fn wire_deliberative(
         fault_protection: options.fault_protection.clone(),
     };
     let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?
-        .with_rover(world.rover.clone(), world.sensor_model.navcam.width);
+        .with_rover(world.rover.clone(), world.sensor_model.navcam.width)
+        .with_area({
+            let g = world.terrain.dem.geometry();
+            [g.origin_x, g.origin_y, g.origin_x + g.width_m(), g.origin_y + g.height_m()]
+        });
     let replies = runtime.bus().subscribe(topics::OPERATOR_REPLY)?;
     let tap = if observer.wants_bus() { Some(runtime.bus().tap()?) } else { None };
     runtime.initialize(0.0)?;

@@ -15,7 +15,8 @@
 //!
 //! A `#` starts a comment running to the end of the line; blank and comment-only lines parse to
 //! `Ok(None)`. Numbers are decimal (`2`, `-0.5`, `1e3`) and must be finite. Distances may carry
-//! the suffix `m` (`2m`); angles are degrees unless suffixed: `deg` or `°` (degrees) or `rad`
+//! the suffix `m` (`2m`); magnitudes are bounded ([`MAX_DRIVE_M`], [`MAX_ANGLE_DEG`],
+//! [`MAX_COORDINATE_M`], [`MAX_PIXEL`]); angles are degrees unless suffixed: `deg` or `°` (degrees) or `rad`
 //! (radians), e.g. `90deg`, `1.5708rad`. No other units are accepted, so a distance typed as
 //! `3deg` is an error rather than a silent misreading. Every error names the offending token by
 //! its 1-based index and text (`end of line` when a token is missing).
@@ -101,6 +102,15 @@ pub enum OperatorCommand {
         topic: Option<String>,
     },
 }
+
+/// Largest magnitude of a `turn` angle or a `set position` yaw (degrees: 100 turns).
+pub const MAX_ANGLE_DEG: f64 = 36_000.0;
+/// Largest magnitude of a `drive` distance (m).
+pub const MAX_DRIVE_M: f64 = 1_000.0;
+/// Largest magnitude of a coordinate (m), as in mission files.
+pub const MAX_COORDINATE_M: f64 = crate::mission::check::MAX_COORDINATE_M;
+/// Largest image row or column (px).
+pub const MAX_PIXEL: f64 = 100_000.0;
 
 /// Every command's first keyword, in the order `help` lists them (for completion and help topics).
 pub const COMMAND_NAMES: &[&str] =
@@ -191,9 +201,25 @@ impl<'a> Tokens<'a> {
             Unit::Pixels => "pixels",
         };
         let value = token.ok_or(()).and_then(|word| parse_quantity(word, unit));
-        value.map_err(|()| {
+        let value = value.map_err(|()| {
             Self::error(index, token, format!("a number ({unit_name}) for {name} in \"{usage}\""))
-        })
+        })?;
+        // Magnitudes are bounded here, at the edge, so that `turn 1e308` is a typing error rather
+        // than a turn that never ends (angles are compared in radians, as parsed).
+        let (limit, shown) = match (unit, name) {
+            (Unit::Degrees, _) => (MAX_ANGLE_DEG.to_radians(), MAX_ANGLE_DEG),
+            (Unit::Pixels, _) => (MAX_PIXEL, MAX_PIXEL),
+            (Unit::Metres, "D") => (MAX_DRIVE_M, MAX_DRIVE_M),
+            (Unit::Metres, _) => (MAX_COORDINATE_M, MAX_COORDINATE_M),
+        };
+        if value.abs() > limit {
+            return Err(Self::error(
+                index,
+                token,
+                format!("a number ({unit_name}) of magnitude at most {shown} for {name} in \"{usage}\""),
+            ));
+        }
+        Ok(value)
     }
 
     fn optional_number(&mut self, unit: Unit, name: &str, usage: &str) -> Result<Option<f64>, CommandError> {

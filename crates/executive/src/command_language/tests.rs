@@ -24,6 +24,18 @@ fn close(a: f64, b: f64) -> bool {
 }
 
 #[test]
+fn operator_numbers_out_of_bounds_are_refused_naming_the_token() {
+    fails_at("turn 1e308", 2, Some("1e308"), "a number (degrees) of magnitude at most 36000 for A");
+    fails_at("turn -36001", 2, Some("-36001"), "at most 36000");
+    fails_at("drive 1e6", 2, Some("1e6"), "at most 1000 for D");
+    fails_at("set position 1 2 1e9rad", 5, Some("1e9rad"), "for YAW");
+    fails_at("track 1e9 3", 2, Some("1e9"), "for ROW");
+    fails_at("waypoint add 3 -2e7", 4, Some("-2e7"), "for Y");
+    assert_eq!(parsed("turn 36000"), OperatorCommand::Turn { angle: 36_000f64.to_radians() });
+    assert_eq!(parsed("drive -1000m"), OperatorCommand::Drive { distance: -1000.0 });
+}
+
+#[test]
 fn every_command_parses_to_its_typed_values() {
     use OperatorCommand as C;
     assert_eq!(parsed("goto 12.5 -3"), C::Goto { x: 12.5, y: -3.0 });
@@ -101,6 +113,7 @@ fn each_error_names_the_wrong_token() {
     fails_at("goto NaN 2", 2, Some("NaN"), "a number (metres) for X");
     fails_at("goto 1 inf", 3, Some("inf"), "for Y");
     fails_at("goto 1e999 0", 2, Some("1e999"), "for X");
+    fails_at("goto 1e308 0", 2, Some("1e308"), "of magnitude at most 10000000 for X");
     fails_at("drive 3deg", 2, Some("3deg"), "a number (metres) for D");
     fails_at("drive 3mm", 2, Some("3mm"), "for D");
     fails_at("drive", 2, None, "for D in \"drive D\"");
@@ -214,9 +227,10 @@ fn radians_without_an_exact_degree_form_fall_back_to_rad() {
 
 fn finite() -> impl Strategy<Value = f64> {
     prop_oneof![
-        any::<f64>().prop_filter("finite", |v| v.is_finite()),
-        (-100_000i64..100_000).prop_map(|v| v as f64 / 100.0),
-        -1e3..1e3f64,
+        // Every bit pattern's value folded into the smallest bound (60 rad < 36000 deg).
+        any::<f64>().prop_filter("finite", |v| v.is_finite()).prop_map(|v| v % 60.0),
+        (-6_000i64..6_000).prop_map(|v| v as f64 / 100.0),
+        -60.0..60.0f64,
     ]
 }
 

@@ -26,6 +26,20 @@ impl Deliberative {
             let outcome = self.end.as_ref().map_or("over", |(o, _)| o.as_str());
             return Ok(format!("error: `{cmd}`: the mission is over ({outcome})"));
         }
+        let target = match &cmd {
+            C::Goto { x, y }
+            | C::WaypointAdd { x, y }
+            | C::SetPosition { x, y, .. }
+            | C::TrackSite { x, y, .. } => Some((*x, *y)),
+            _ => None,
+        };
+        if let (Some([x0, y0, x1, y1]), Some((x, y))) = (self.area, target)
+            && !((x0..=x1).contains(&x) && (y0..=y1).contains(&y))
+        {
+            return Ok(format!(
+                "error: `{cmd}`: ({x:.2}, {y:.2}) is outside the terrain (x {x0:.1}..{x1:.1}, y {y0:.1}..{y1:.1} m)"
+            ));
+        }
         Ok(match cmd {
             C::Goto { x, y } => self.goto(bus, Point2::new(x, y))?,
             C::WaypointAdd { x, y } => self.add_waypoint(bus, Point2::new(x, y))?,

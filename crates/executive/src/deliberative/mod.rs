@@ -99,6 +99,9 @@ pub struct Deliberative {
     approaches: BTreeMap<u64, approach::ApproachRun>,
     /// The last Navcam pair taken (what `track ROW COL` designates on).
     last_navcam: Option<approach::LastNavcam>,
+    /// The terrain's extent [x min, y min, x max, y max] (m): operator targets outside it are
+    /// refused before a map is sized from them.
+    area: Option<[f64; 4]>,
 }
 
 impl Deliberative {
@@ -149,6 +152,7 @@ impl Deliberative {
             navcam_width: 512,
             approaches: BTreeMap::new(),
             last_navcam: None,
+            area: None,
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -165,6 +169,13 @@ impl Deliberative {
     pub fn with_rover(mut self, rover: RoverConfig, navcam_width: usize) -> Self {
         self.rover = rover;
         self.navcam_width = navcam_width;
+        self
+    }
+
+    /// The terrain's extent [x min, y min, x max, y max] (m), outside which `goto`, `waypoint
+    /// add`, `set position` and `track X Y Z` are refused.
+    pub fn with_area(mut self, area: [f64; 4]) -> Self {
+        self.area = Some(area);
         self
     }
 

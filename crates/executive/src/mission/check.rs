@@ -23,7 +23,7 @@ pub fn in_range(v: f64, min: f64, max: f64, unit: &str) -> Result<(), String> {
     if v.is_finite() && (min..=max).contains(&v) {
         Ok(())
     } else {
-        Err(format!("must be a finite number in [{min}, {max}]{unit}, got {v}"))
+        Err(format!("must be a finite number in [{min}, {max}]{unit}, got {}", shown(v)))
     }
 }
 
@@ -32,8 +32,13 @@ pub fn positive_up_to(v: f64, max: f64, unit: &str) -> Result<(), String> {
     if v.is_finite() && v > 0.0 && v <= max {
         Ok(())
     } else {
-        Err(format!("must be a finite number in (0, {max}]{unit}, got {v}"))
+        Err(format!("must be a finite number in (0, {max}]{unit}, got {}", shown(v)))
     }
+}
+
+/// A number as a message shows it: in scientific notation when huge (`1e308`, not 309 digits).
+fn shown(v: f64) -> String {
+    if v.is_finite() && v.abs() >= 1.0e9 { format!("{v:e}") } else { v.to_string() }
 }
 
 /// A coordinate (local or projected metres).
@@ -70,7 +75,7 @@ pub fn output_name(name: &str) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!(
-            "{name:?} must be a plain name of at most 100 characters (no '/', '\\\\', ':', \"..\" or control characters): outputs go in a folder of that name"
+            "{name:?} must be a plain name of at most 100 characters (no '/', '\\', ':', \"..\" or control characters): outputs go in a folder of that name"
         ))
     }
 }
