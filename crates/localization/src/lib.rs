@@ -6,6 +6,7 @@
 //! - [`ekf_ml`]: the EKF with terrain-matching fixes against the rover's own map ("ekf-ml").
 //! - [`matching`]: terrain map matching: maximum likelihood with branch and bound (paper 000
 //!   section 4) and partial Hausdorff (paper 002 section 3).
+//! - [`lander`]: the rover's position from the lander's stereo sighting (paper 002 section 2).
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
@@ -21,6 +22,7 @@ pub mod dead_reckoning;
 pub mod ekf;
 pub mod ekf_ml;
 pub mod evaluation;
+pub mod lander;
 pub mod matching;
 pub mod synthetic;
 pub mod target;

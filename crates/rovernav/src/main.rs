@@ -4,6 +4,7 @@ mod bench;
 mod campaign;
 mod distributed;
 mod eval_horizon;
+mod eval_lander;
 mod eval_localization;
 mod eval_science;
 mod eval_stereo;
@@ -78,6 +79,8 @@ enum EvalCommand {
     Science(eval_science::EvalScienceArgs),
     /// Visual target tracking: approaches to a designated rock with and without VTT.
     Vtt(eval_vtt::EvalVttArgs),
+    /// Rover detection in lander images: downrange and cross-range errors at 2-10 m.
+    Lander(eval_lander::EvalLanderArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -213,6 +216,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Stereo(args))) => eval_stereo::run(args),
         Some(Command::Eval(EvalCommand::Science(args))) => eval_science::run(args),
         Some(Command::Eval(EvalCommand::Vtt(args))) => eval_vtt::run(args),
+        Some(Command::Eval(EvalCommand::Lander(args))) => eval_lander::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Graph(args)) => graph_cmd::run(args),
         Some(Command::Campaign(args)) => campaign::run(args),

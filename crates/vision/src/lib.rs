@@ -9,6 +9,7 @@
 pub mod camera;
 pub mod codec;
 pub mod image;
+pub mod lander;
 pub mod rectify;
 pub mod rig;
 pub mod stereo;

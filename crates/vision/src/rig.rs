@@ -13,6 +13,12 @@
 //! ground plane of the wheels); the `lander` and `descent` cameras are in the site frame, the
 //! mission start pose levelled (x along the start heading, origin on the ground at the start).
 //! [`RigCamera::in_world`] moves either to the world frame.
+//!
+//! The lander carries a rectified stereo pair on a pan/tilt mast (paper 002 section 2: "the
+//! lander has a stereo pair of cameras on a pan/tilt platform"): `lander` (left, at
+//! `lander_position`) and `lander_right` (`lander_baseline` to its right). [`Rig::camera`] aims
+//! them at `lander_target`; [`Rig::lander_camera`] points them anywhere by site-frame pan and
+//! tilt, and [`Rig::lander_aim`] gives the pan and tilt that look at a site-frame point.
 
 use crate::Cahv;
 use crate::camera::Movable;
@@ -20,7 +26,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rovernav_core::{Pose3, RoverConfig};
 
 /// Names of every rig camera, pairs left before right.
-pub const CAMERA_NAMES: [&str; 8] = [
+pub const CAMERA_NAMES: [&str; 9] = [
     "navcam_left",
     "navcam_right",
     "hazcam_front_left",
@@ -29,6 +35,7 @@ pub const CAMERA_NAMES: [&str; 8] = [
     "hazcam_rear_right",
     "lander",
     "descent",
+    "lander_right",
 ];
 
 /// The frame a rig camera's model is expressed in.
@@ -105,6 +112,8 @@ pub struct Rig {
     pub lander_fov: f64,
     /// Lander image size (pixels, square).
     pub lander_size: usize,
+    /// Lander stereo baseline (m): `lander_right` sits this far to the right of `lander`.
+    pub lander_baseline: f64,
     /// Descent camera altitude above the site origin (m).
     pub descent_altitude: f64,
     /// Descent camera field of view (rad).
@@ -134,6 +143,8 @@ impl Rig {
             lander_target: [2.0, 0.0, 0.0],
             lander_fov: 50f64.to_radians(),
             lander_size: 1024,
+            // Pathfinder's IMP: 15 cm between its two eyes.
+            lander_baseline: 0.15,
             descent_altitude: 100.0,
             descent_fov: 45f64.to_radians(),
             descent_size: 1024,
@@ -191,11 +202,9 @@ impl Rig {
                 };
                 (model, Mount::Body, Some(partner))
             }
-            "lander" => {
-                let p = Vector3::from(self.lander_position);
-                let axis = Vector3::from(self.lander_target) - p;
-                let right = axis.cross(&Vector3::z());
-                (square(p, axis, right, half(self.lander_fov), self.lander_size), Mount::Site, None)
+            "lander" | "lander_right" => {
+                let (pan, tilt) = self.lander_aim(self.lander_target);
+                return self.lander_camera(name, pan, tilt);
             }
             _ => {
                 // "descent": straight down, image up = site +x.
@@ -206,6 +215,30 @@ impl Rig {
             }
         };
         Some(RigCamera { name, model, mount, partner })
+    }
+}
+
+impl Rig {
+    /// Site-frame pan (azimuth from site +x, positive left) and tilt (elevation, positive up)
+    /// (rad) that point the lander mast's left camera at the site-frame point `target`.
+    pub fn lander_aim(&self, target: [f64; 3]) -> (f64, f64) {
+        let d = Vector3::from(target) - Vector3::from(self.lander_position);
+        (d.y.atan2(d.x), d.z.atan2(d.x.hypot(d.y)))
+    }
+
+    /// A lander camera (`lander` or `lander_right`) with the mast at site-frame `pan` and `tilt`
+    /// (rad); the left camera's centre is `lander_position`, the right one `lander_baseline`
+    /// to its right, both sharing axis and image plane (a rectified pair). `None` for another
+    /// name.
+    pub fn lander_camera(&self, name: &str, pan: f64, tilt: f64) -> Option<RigCamera> {
+        let (name, partner, lateral) = match name {
+            "lander" => ("lander", "lander_right", 0.0),
+            "lander_right" => ("lander_right", "lander", -self.lander_baseline),
+            _ => return None,
+        };
+        let model =
+            pointed(self.lander_position, pan, tilt, lateral, 0.5 * self.lander_fov, self.lander_size);
+        Some(RigCamera { name, model, mount: Mount::Site, partner: Some(partner) })
     }
 }
 
@@ -259,5 +292,31 @@ mod tests {
             assert!(baseline > 0.05 && (cl.model.c - cr.model.c).dot(&cl.model.h_axis()) < 0.0);
         }
         assert!(rig.camera("pancam", 0.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn the_lander_pair_is_rectified_and_aims_at_its_target() {
+        let rig = Rig::new(&RoverConfig::default());
+        let target = [3.0, -4.0, 0.4];
+        let (pan, tilt) = rig.lander_aim(target);
+        let l = rig.lander_camera("lander", pan, tilt).unwrap();
+        let r = rig.lander_camera("lander_right", pan, tilt).unwrap();
+        assert_eq!((l.partner, r.partner), (Some("lander_right"), Some("lander")));
+        // The target projects on the left image's centre.
+        let p = l.model.project(&Point3::from(target)).unwrap();
+        let c = 0.5 * (rig.lander_size as f64 - 1.0);
+        assert!((p.x - c).abs() < 1e-9 && (p.y - c).abs() < 1e-9, "{p:?}");
+        // Rectified along H with the stated baseline, the left camera at the mast position.
+        assert!((l.model.c - Vector3::from(rig.lander_position)).norm() < 1e-12);
+        let b = r.model.c - l.model.c;
+        assert!((b.norm() - rig.lander_baseline).abs() < 1e-12);
+        assert!((b.normalize() - l.model.h_axis()).norm() < 1e-9);
+        assert!((l.model.a - r.model.a).norm() < 1e-12);
+        // Rig::camera aims the same pair at lander_target.
+        let d = rig.camera("lander", 0.0, 0.0).unwrap();
+        let q = d.model.project(&Point3::from(rig.lander_target)).unwrap();
+        assert!((q.x - c).abs() < 1e-9 && (q.y - c).abs() < 1e-9);
+        assert_eq!(rig.camera("lander_right", 0.0, 0.0).unwrap().mount, Mount::Site);
+        assert!(rig.lander_camera("navcam_left", 0.0, 0.0).is_none());
     }
 }

@@ -1,6 +1,7 @@
 //! Labelled scenes for the onboard-science detectors (paper 003 section 5): skies with and
 //! without clouds ([`clouds`]) and fixed-camera sequences with and without dust devils
-//! ([`dust_devils`]), rendered by [`crate::render`] with their truth.
+//! ([`dust_devils`]), and the lander watching the rover turn ([`lander`]), rendered by
+//! [`crate::render`] with their truth.
 //!
 //! Clouds and dust devils are the renderer's transparent volumes. The truth of every pixel comes
 //! from the geometry, not from the detector's view of the image: the volumes' optical depth along
@@ -12,6 +13,7 @@
 
 pub mod clouds;
 pub mod dust_devils;
+pub mod lander;
 
 use nalgebra::Point2;
 use rovernav_core::{Pose3, RoverConfig};
