@@ -22,7 +22,7 @@ pub mod spec;
 pub mod summary;
 
 pub use compare::{Comparison, compare};
-pub use output::{CampaignMeta, merge_dirs, read_dir, write_dir};
+pub use output::{CampaignMeta, RowLog, merge_dirs, read_dir, write_dir};
 pub use plan::{Job, Plan, Shard, TerrainKind, TrialInfo};
 pub use row::Row;
 pub use runner::run_jobs;

@@ -3,7 +3,10 @@
 //! A folder holds `campaign.json` (the resolved campaign and the shard), `rows.csv`,
 //! `rows.jsonl`, `summary.json`, `summary.md`, `plots/*.svg` and `failures/` (a traverse
 //! picture per failed run and a mission file per failed yard trial). Every file is written to a
-//! temporary name and renamed, so a reader never sees half a file.
+//! temporary name and renamed, so a reader never sees half a file, except `rows.jsonl` while the
+//! campaign runs: [`RowLog`] appends each row as its run ends (so a killed campaign keeps every
+//! finished run), and the end of the campaign rewrites it sorted. A final line without its line
+//! break is an append cut short and is left out when the folder is read.
 
 use crate::plan::{Plan, Shard, TrialInfo};
 use crate::row::{Row, from_jsonl, to_csv, to_jsonl};
@@ -86,6 +89,50 @@ pub fn prepare_dir(dir: &Path) -> Result<PathBuf, CampaignError> {
     Ok(failures)
 }
 
+/// `rows.jsonl` while a campaign runs: `campaign.json` is written first, then each row is
+/// appended (one `write` of one whole line) as its run ends.
+pub struct RowLog {
+    path: PathBuf,
+    file: std::sync::Mutex<std::fs::File>,
+    error: std::sync::Mutex<Option<CampaignError>>,
+}
+
+impl RowLog {
+    /// Writes `dir/campaign.json` and starts an empty `dir/rows.jsonl`.
+    pub fn start(dir: &Path, meta: &CampaignMeta) -> Result<Self, CampaignError> {
+        write_atomic(&dir.join("campaign.json"), &pretty(meta))?;
+        // A previous campaign's summary in this folder would describe other rows.
+        for name in ["summary.json", "summary.md", "rows.csv"] {
+            let _ = std::fs::remove_file(dir.join(name));
+        }
+        let path = dir.join("rows.jsonl");
+        let file = std::fs::File::create(&path).map_err(|e| CampaignError::io(&path, e))?;
+        Ok(Self { path, file: std::sync::Mutex::new(file), error: std::sync::Mutex::new(None) })
+    }
+
+    /// Appends one row (from any worker); the first failure is kept for [`RowLog::finish`].
+    pub fn append(&self, row: &Row) {
+        use std::io::Write;
+        let mut line = serde_json::to_vec(row).expect("rows serialise");
+        line.push(b'\n');
+        let written = self.file.lock().expect("no append panics holding the lock").write_all(&line);
+        if let Err(e) = written {
+            self.error
+                .lock()
+                .expect("no append panics holding the lock")
+                .get_or_insert(CampaignError::io(&self.path, e));
+        }
+    }
+
+    /// The first append that failed, if any.
+    pub fn finish(self) -> Result<(), CampaignError> {
+        match self.error.into_inner().expect("appends have finished") {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
 /// Writes every file of the folder but `failures/` (the runner fills it) and returns the summary.
 pub fn write_dir(
     dir: &Path,
@@ -139,7 +186,9 @@ pub fn read_dir(dir: &Path) -> Result<(CampaignMeta, Vec<Row>), CampaignError> {
     })?;
     let (rows_path, text) = read("rows.jsonl")?;
     let shown = rows_path.display().to_string();
-    let rows = from_jsonl(&text, &shown)?;
+    // A last line without its line break is an append cut short by a kill: left out.
+    let whole = if text.ends_with('\n') { &text[..] } else { &text[..text.rfind('\n').map_or(0, |i| i + 1)] };
+    let rows = from_jsonl(whole, &shown)?;
     for (i, r) in rows.iter().enumerate() {
         let bad = |why: &str| CampaignError::Invalid {
             path: shown.clone(),
@@ -158,12 +207,14 @@ pub fn read_dir(dir: &Path) -> Result<(CampaignMeta, Vec<Row>), CampaignError> {
 }
 
 /// Joins shard folders into one campaign: checks they are slices of the same campaign, that no
-/// run appears twice and that none is missing, copies their failure galleries into `out`, and
-/// returns the whole campaign's meta and rows (to write with [`write_dir`]). Files it could not
-/// copy are reported as notes.
+/// run appears twice and that none is missing (with `partial`, missing runs, as a killed
+/// campaign leaves, are a note saying which instead), copies their failure galleries into `out`,
+/// and returns the whole campaign's meta and rows (to write with [`write_dir`]). Files it could
+/// not copy are reported as notes.
 pub fn merge_dirs(
     dirs: &[PathBuf],
     out: &Path,
+    partial: bool,
 ) -> Result<(CampaignMeta, Vec<Row>, Vec<String>), CampaignError> {
     let Some(first_dir) = dirs.first() else {
         return Err(CampaignError::Merge("no folders given".into()));
@@ -213,19 +264,25 @@ pub fn merge_dirs(
             }
         }
     }
+    let mut notes = Vec::new();
     if seen.len() != first.jobs {
-        let missing = (0..first.jobs).find(|j| !seen.contains_key(j)).unwrap_or(0);
+        let missing: Vec<usize> = (0..first.jobs).filter(|j| !seen.contains_key(j)).collect();
         let n = first.navigators.len().max(1);
-        return Err(CampaignError::Merge(format!(
-            "{} of {} runs are missing (first: trial {} / {}); give every shard's folder",
-            first.jobs - seen.len(),
-            first.jobs,
-            missing / n,
-            first.navigators.get(missing % n).map_or("?", String::as_str)
-        )));
+        let run = |j: usize| {
+            format!("trial {} / {}", j / n, first.navigators.get(j % n).map_or("?", String::as_str))
+        };
+        let count = format!("{} of {} runs are missing", missing.len(), first.jobs);
+        if !partial {
+            return Err(CampaignError::Merge(format!(
+                "{count} (first: {}); give every shard's folder, or --partial to merge what there is",
+                run(missing[0])
+            )));
+        }
+        let listed: Vec<String> = missing.iter().take(10).map(|&j| run(j)).collect();
+        let more = if missing.len() > 10 { ", ..." } else { "" };
+        notes.push(format!("{count}: {}{more}", listed.join(", ")));
     }
     let failures = prepare_dir(out)?;
-    let mut notes = Vec::new();
     let mut meta = first.clone();
     meta.shard = None;
     let mut all = Vec::new();
@@ -246,7 +303,7 @@ pub fn merge_dirs(
                 }
                 match std::fs::read(&from) {
                     Ok(bytes) => write_atomic(&to, &bytes)?,
-                    Err(e) => notes.push(format!("{}: {e}", from.display())),
+                    Err(e) => notes.push(format!("picture not copied: {}: {e}", from.display())),
                 }
             }
         }

@@ -101,6 +101,9 @@ struct MergeArgs {
     /// Print summary.json to standard output instead of the tables.
     #[arg(long)]
     json: bool,
+    /// Merge even when runs are missing (a campaign killed part way): say which, summarise the rest.
+    #[arg(long)]
+    partial: bool,
 }
 
 /// Runs `rovernav campaign` or `rovernav campaign merge`.
@@ -184,14 +187,19 @@ fn run_campaign(args: RunArgs) -> anyhow::Result<()> {
         shard.map_or(String::new(), |s| format!(" shard {s}"))
     ));
     bar.enable_steady_tick(std::time::Duration::from_millis(250));
+    // campaign.json first, then each row appended as its run ends: a killed campaign keeps every
+    // finished run (`campaign merge --partial` summarises them).
+    let meta = CampaignMeta::of(&plan, shard);
+    let row_log = rovernav_campaign::RowLog::start(&out_dir, &meta)?;
     let on_done = |row: &rovernav_campaign::Row| {
+        row_log.append(row);
         bar.inc(1);
         bar.set_message(format!("trial {} {}: {}", row.trial, row.navigator, row.outcome));
     };
     let rows = rovernav_campaign::run_jobs(&plan, &jobs, threads, Some(&failures), &on_done);
     bar.finish_and_clear();
     let rows = rows?;
-    let meta = CampaignMeta::of(&plan, shard);
+    row_log.finish()?;
     let (summary, machine) = rovernav_campaign::write_dir(&out_dir, &meta, &rows)?;
     print_summary(&summary, &machine, &out_dir, args.json);
     Ok(())
@@ -205,9 +213,9 @@ fn merge(args: MergeArgs) -> anyhow::Result<()> {
             PathBuf::from("out").join(format!("campaign-{}", meta.spec.name))
         }
     };
-    let (meta, rows, notes) = rovernav_campaign::merge_dirs(&args.dirs, &out_dir)?;
+    let (meta, rows, notes) = rovernav_campaign::merge_dirs(&args.dirs, &out_dir, args.partial)?;
     for note in notes {
-        eprintln!("note: picture not copied: {note}");
+        eprintln!("note: {note}");
     }
     let (summary, machine) = rovernav_campaign::write_dir(&out_dir, &meta, &rows)
         .with_context(|| format!("{}: cannot write the merged campaign", out_dir.display()))?;

@@ -20,7 +20,8 @@ const WAIT_FOR_INPUT: Duration = Duration::from_millis(100);
 
 /// Standard input and output as the operator's link.
 struct StdinLink {
-    lines: Receiver<String>,
+    /// Each line of input, or why it is not a command (a line that is not UTF-8).
+    lines: Receiver<Result<String, String>>,
     closed: bool,
 }
 
@@ -29,10 +30,24 @@ impl StdinLink {
     fn spawn() -> Self {
         let (send, lines) = channel();
         std::thread::spawn(move || {
-            for line in std::io::stdin().lock().lines() {
-                // A read error ends input like end of file does.
-                let Ok(line) = line else { break };
-                if send.send(line).is_err() {
+            let mut stdin = std::io::stdin().lock();
+            for number in 1.. {
+                // Bytes, not `lines()`: one line that is not UTF-8 is an error on that line rather
+                // than the end of input (which would drop every later command, `mission abort`
+                // included).
+                let mut bytes = Vec::new();
+                match stdin.read_until(b'\n', &mut bytes) {
+                    Ok(0) | Err(_) => break,
+                    Ok(_) => {}
+                }
+                let line = strip_line_end(bytes);
+                let item = String::from_utf8(line).map_err(|e| {
+                    format!(
+                        "error: input line {number} is not UTF-8 text (byte {})",
+                        e.utf8_error().valid_up_to() + 1
+                    )
+                });
+                if send.send(item).is_err() {
                     break;
                 }
             }
@@ -54,7 +69,11 @@ impl OperatorLink for StdinLink {
             self.lines.try_recv().map_err(|e| e == TryRecvError::Disconnected)
         };
         match next {
-            Ok(line) => vec![line],
+            Ok(Ok(line)) => vec![line],
+            Ok(Err(why)) => {
+                self.reply(&why);
+                Vec::new()
+            }
             Err(disconnected) => {
                 self.closed = disconnected;
                 Vec::new()
@@ -74,6 +93,17 @@ impl OperatorLink for StdinLink {
     }
 }
 
+/// A line's bytes without its `\n` or `\r\n` ending.
+fn strip_line_end(mut bytes: Vec<u8>) -> Vec<u8> {
+    if bytes.last() == Some(&b'\n') {
+        bytes.pop();
+        if bytes.last() == Some(&b'\r') {
+            bytes.pop();
+        }
+    }
+    bytes
+}
+
 /// Runs a mission with operator commands from standard input.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let crate::MissionToRun { mission, origin_of_navigator, out_dir } = crate::MissionToRun::of(&args)?;
@@ -82,9 +112,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         mission.name
     );
     let mut link = StdinLink::spawn();
+    // The world first: a mission that cannot be built leaves no telemetry.mcap.
+    let run = Run::mission(&mission, &origin_of_navigator)?;
     let mut log = crate::output::RunLog::open(&out_dir)?;
-    let output = Run::mission(&mission, &origin_of_navigator)
-        .and_then(|run| run.observer(&mut log.recorder).operator(&mut link).execute());
+    let output = run.observer(&mut log.recorder).operator(&mut link).execute();
     log.close(output.is_ok())?;
     let output = output?;
     crate::output::write_run_outputs(&out_dir, &output)?;

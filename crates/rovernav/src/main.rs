@@ -291,10 +291,11 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         bar.set_position((p.time_fraction * 1000.0) as u64);
         bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
     };
-    // Every topic of the run goes to telemetry.mcap; finished even when the run fails.
+    // The world is built before telemetry.mcap is created, so a mission that cannot be built
+    // leaves no log; every topic of the run goes to the log, finished even when the run fails.
+    let run = Run::mission(&mission, &origin_of_navigator).inspect_err(|_| bar.finish_and_clear())?;
     let mut log = output::RunLog::open(&out_dir)?;
-    let output = Run::mission(&mission, &origin_of_navigator)
-        .and_then(|run| run.progress(&mut on_progress).observer(&mut log.recorder).execute());
+    let output = run.progress(&mut on_progress).observer(&mut log.recorder).execute();
     bar.finish_and_clear();
     log.close(output.is_ok())?;
     let output = output?;

@@ -69,9 +69,17 @@ impl WorldMsg {
     pub fn to_world(&self) -> Result<World, String> {
         let t = &self.terrain;
         let geometry = t.grid;
+        // The declared size is checked (its product may wrap) before anything that size is
+        // allocated: the heights here, the replay's sensed grid later.
+        let cells =
+            rovernav_core::limits::checked_elements(&[geometry.rows as u64, geometry.cols as u64], 4, None)
+                .map_err(|why| format!("field `terrain.grid`: {why}"))?;
+        if !(geometry.origin_x.is_finite() && geometry.origin_y.is_finite()) {
+            return Err("field `terrain.grid`: origin is not finite".into());
+        }
         let heights = base64::decode_f32s(&t.heights_f32le)
             .map_err(|e| format!("field `terrain.heights_f32le`: {e}"))?;
-        if heights.len() != geometry.len() || geometry.is_empty() {
+        if heights.len() != cells || cells == 0 {
             return Err(format!(
                 "field `terrain.heights_f32le`: {} heights for a {} x {} grid",
                 heights.len(),
@@ -138,6 +146,21 @@ mod tests {
             (world.start.x, world.start.y, world.start.yaw)
         );
         assert_eq!(back.goal, world.goal);
+    }
+
+    #[test]
+    fn world_declaring_a_huge_grid_is_refused_before_allocating() {
+        let mut msg = WorldMsg::of(&small_world());
+        let n = msg.terrain.grid.len();
+        // A size whose product wraps to the true count, and one past the memory ceiling.
+        msg.terrain.grid.cols = (1usize << 63) + n / 2;
+        msg.terrain.grid.rows = 2;
+        let e = msg.to_world().unwrap_err();
+        assert!(e.contains("terrain.grid") && e.contains("overflows"), "{e}");
+        msg.terrain.grid.cols = 1 << 20;
+        msg.terrain.grid.rows = 1 << 20;
+        let e = msg.to_world().unwrap_err();
+        assert!(e.contains("terrain.grid") && e.contains("memory ceiling"), "{e}");
     }
 
     #[test]

@@ -40,6 +40,9 @@ pub fn parse_geotiff(file: &Path, bytes: &[u8]) -> Result<Dem, LoadError> {
     if cols == 0 || rows == 0 {
         return Err(LoadError::invalid(file, "ImageWidth/ImageLength", "image has no pixels"));
     }
+    // The heights grid (f32) this header asks for, against the memory ceiling, before decoding.
+    rovernav_core::limits::checked_elements(&[rows as u64, cols as u64], 4, None)
+        .map_err(|why| LoadError::invalid(file, "ImageWidth/ImageLength", why))?;
     match decoder.colortype().map_err(tiff_err)? {
         ColorType::Gray(_) => {}
         other => {

@@ -81,6 +81,8 @@ pub fn parse_npy(file: &Path, bytes: &[u8], resolution: f64) -> Result<Dem, Load
     if rows == 0 || cols == 0 {
         return Err(LoadError::invalid(file, "shape", format!("{shape} has no cells")));
     }
+    rovernav_core::limits::checked_elements(&[rows as u64, cols as u64], 4, None)
+        .map_err(|why| LoadError::invalid(file, "shape", why))?;
     let data_start = header_start + header_len;
     let needed = rows.checked_mul(cols).and_then(|n| n.checked_mul(width));
     let needed = needed.ok_or_else(|| LoadError::invalid(file, "shape", "size overflows"))?;
