@@ -10,7 +10,7 @@
 //! the body, and places with about 1 mm and 1 deg repeatability.
 //!
 //! Geometry here (body frame: x forward, y left, z up, origin on the wheels' ground plane):
-//! - azimuth axis vertical through the shoulder at [`ArmGeometry::base`] = (0.50, -0.12, 0.28) m,
+//! - azimuth axis vertical through the shoulder at [`ArmGeometry::base`] = (0.50, -0.12, 0.32) m,
 //!   on a bracket ahead of the body's front face, right of the Hazcams (as on MER the stowed
 //!   arm lies across the front below the Hazcams);
 //! - joints 2-4 are parallel pitch axes perpendicular to the arm's vertical plane: upper arm
@@ -64,7 +64,7 @@ impl Default for ArmGeometry {
     fn default() -> Self {
         let d = f64::to_radians;
         Self {
-            base: V3::new(0.50, -0.12, 0.28),
+            base: V3::new(0.50, -0.12, 0.32),
             upper: 0.35,
             fore: 0.35,
             wrist: 0.10,
@@ -142,18 +142,19 @@ impl Arm {
     }
 
     /// The stowed-for-driving pose: arm pointing left across the front, forearm folded back
-    /// under it, turret right of the shoulder with the instrument pointing forward.
+    /// under it, wrist link 40 deg below the upper arm's direction, instrument pointing forward.
     pub fn stowed(&self) -> Joints {
         let d = f64::to_radians;
-        [d(90.0), 0.0, d(-170.0), d(-10.0), d(-90.0)]
+        [d(90.0), 0.0, d(-170.0), d(130.0), d(-90.0)]
     }
 
-    /// The unstowed pose for a work azimuth (rad): upper arm raised 60 deg, forearm reaching
-    /// forward and down, wrist link pointing back and instrument across the arm as when stowed. From the stowed pose only
-    /// the shoulder, elbow and wrist move, keeping the wrist link's direction.
+    /// The unstowed pose for a work azimuth (rad): upper arm raised 60 deg, elbow opened to
+    /// -130 deg, wrist link and instrument as when stowed. From the stowed pose only the
+    /// shoulder, elbow and wrist move, keeping the wrist link's direction, so the folded end
+    /// rises with the upper arm.
     pub fn unstowed(&self, azimuth: f64) -> Joints {
         let d = f64::to_radians;
-        [azimuth, d(60.0), d(-130.0), d(-110.0), d(-90.0)]
+        [azimuth, d(60.0), d(-130.0), d(30.0), d(-90.0)]
     }
 
     /// The stow volume: the box around the stowed arm grown by 3 cm. It holds no terrain: the

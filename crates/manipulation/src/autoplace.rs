@@ -113,9 +113,21 @@ pub fn autoplace(
     params: &AutoPlaceParams,
 ) -> (Outcome, Octree) {
     let tree = terrain_model(arm, views, &params.octree);
+    let outcome = place_with(arm, &tree, targeting, commanded, params);
+    (outcome, tree)
+}
+
+/// Target selection and trajectory search against a terrain model already built.
+pub fn place_with(
+    arm: &Arm,
+    tree: &Octree,
+    targeting: &[[f32; 3]],
+    commanded: &V3,
+    params: &AutoPlaceParams,
+) -> Outcome {
     let surface = Surface::new(targeting);
     let Some(candidates) = surface.candidates(commanded, &params.targets) else {
-        return (Outcome::Refused { reason: Reason::NoData, examined: 0 }, tree);
+        return Outcome::Refused { reason: Reason::NoData, examined: 0 };
     };
     let mut furthest = Reason::NoData;
     for (i, p) in candidates.iter().enumerate() {
@@ -130,11 +142,11 @@ pub fn autoplace(
                 continue;
             }
         };
-        match plan(arm, &tree, &V3::from(c.point), &V3::from(c.normal), &params.plan) {
-            Ok(plan) => return (Outcome::Placed { target: c, plan, examined: i + 1 }, tree),
+        match plan(arm, tree, &V3::from(c.point), &V3::from(c.normal), &params.plan) {
+            Ok(plan) => return Outcome::Placed { target: c, plan, examined: i + 1 },
             Err(Infeasible::Reach) => furthest = furthest.max(Reason::Reach),
             Err(Infeasible::Collision) => furthest = furthest.max(Reason::Collision),
         }
     }
-    (Outcome::Refused { reason: furthest, examined: candidates.len() }, tree)
+    Outcome::Refused { reason: furthest, examined: candidates.len() }
 }

@@ -11,9 +11,9 @@
 //! covered by spheres grown by half a step and the clearance, and every sphere must lie in
 //! verified-free cells.
 //!
-//! The last [`PlanParams::contact_zone`] of the instrument is exempt from the terrain test on the
-//! straight move and at contact: that is where the instrument meets the surface on purpose, and
-//! the target's patch was checked for roughness.
+//! On the straight move the instrument's part lower than [`PlanParams::contact_zone`] above the
+//! target is exempt from the terrain test: that is where it meets the surface on purpose (the
+//! surface's own cells reach a cell above it), inside the patch whose roughness was checked.
 
 use crate::arm::{Arm, Joints, cost_between, lever_arms};
 use crate::geometry::{Capsule, V3};
@@ -26,7 +26,8 @@ pub struct PlanParams {
     pub standoff: f64,
     /// How far past the sensed surface the contact is commanded (m).
     pub overdrive: f64,
-    /// Length of the instrument's end exempt from the terrain test near contact (m).
+    /// On the straight move, the instrument's part lower than this above the target is exempt
+    /// from the terrain test (m).
     pub contact_zone: f64,
     /// Margin kept between the arm and any cell not verified free (m).
     pub clearance: f64,
@@ -44,7 +45,7 @@ impl Default for PlanParams {
             contact_zone: 0.07,
             clearance: 0.01,
             step: 0.01,
-            tilts_deg: vec![0.0, 5.0, 10.0],
+            tilts_deg: vec![0.0, 5.0],
         }
     }
 }
@@ -127,6 +128,37 @@ pub fn pose_clear(arm: &Arm, octree: &Octree, q: &Joints, exempt: f64, params: &
     })
 }
 
+/// Whether every sample of the joint-space motion `a` -> `b` is clear ([`pose_clear`]); the
+/// samples are tested coarse to fine (every 16th first, then the ones between), so a blocked
+/// motion is found early. The result does not depend on the order.
+pub fn path_clear(
+    arm: &Arm,
+    octree: &Octree,
+    a: &Joints,
+    b: &Joints,
+    exempt: f64,
+    params: &PlanParams,
+) -> bool {
+    let samples = interpolate(arm, a, b, params.step);
+    let n = samples.len();
+    let mut stride = 16usize;
+    let mut done = vec![false; n];
+    loop {
+        for i in (0..n).step_by(stride) {
+            if !done[i] {
+                done[i] = true;
+                if !pose_clear(arm, octree, &samples[i], exempt, params) {
+                    return false;
+                }
+            }
+        }
+        if stride == 1 {
+            return true;
+        }
+        stride /= 2;
+    }
+}
+
 /// The instrument capsule without its last `exempt` metres (`None` if nothing is left).
 pub fn trimmed(c: &Capsule, exempt: f64) -> Option<Capsule> {
     let d = c.b - c.a;
@@ -175,18 +207,16 @@ pub fn plan(
             reached = true;
             // Lift in place first, then turn to the work azimuth.
             let via = vec![stowed, arm.unstowed(stowed[0]), arm.unstowed(q_standoff[0]), q_standoff];
-            let swept_ok = via.windows(2).all(|w| {
-                interpolate(arm, &w[0], &w[1], params.step)
-                    .iter()
-                    .all(|q| pose_clear(arm, octree, q, 0.0, params))
+            // Along the straight move, the instrument's part lower than `contact_zone` above the
+            // target may meet the surface.
+            let per_pose = (params.standoff + params.overdrive) / n as f64;
+            let approach_ok = approach.windows(2).enumerate().all(|(k, w)| {
+                let height = params.standoff - per_pose * (k + 1) as f64;
+                let exempt = (params.contact_zone - height).max(0.0);
+                path_clear(arm, octree, &w[0], &w[1], exempt, params)
             });
-            let approach_ok = swept_ok
-                && approach.windows(2).all(|w| {
-                    interpolate(arm, &w[0], &w[1], params.step)
-                        .iter()
-                        .all(|q| pose_clear(arm, octree, q, params.contact_zone, params))
-                });
-            if approach_ok {
+            if approach_ok && via.windows(2).rev().all(|w| path_clear(arm, octree, &w[0], &w[1], 0.0, params))
+            {
                 return Ok(Plan { via, approach, axis: axis.into(), contact: contact_tip.into() });
             }
         }

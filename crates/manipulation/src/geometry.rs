@@ -71,6 +71,11 @@ impl Capsule {
     /// Whether this capsule overlaps the box (sampled at a tenth of the radius: conservative by
     /// at most that).
     pub fn touches_box(&self, b: &Aabb) -> bool {
+        let r = V3::repeat(self.radius);
+        let (lo, hi) = (self.a.inf(&self.b) - r, self.a.sup(&self.b) + r);
+        if (0..3).any(|k| hi[k] < b.min[k] || lo[k] > b.max[k]) {
+            return false;
+        }
         let step = 0.1 * self.radius.max(0.005);
         self.cover(step).any(|p| b.distance(&p) < self.radius + 0.5 * step)
     }

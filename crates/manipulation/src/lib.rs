@@ -18,5 +18,5 @@ pub mod octree;
 pub mod targets;
 
 pub use arm::{Arm, ArmGeometry, Joints};
-pub use autoplace::{AutoPlaceParams, Outcome, Reason, autoplace, terrain_model};
+pub use autoplace::{AutoPlaceParams, Outcome, Reason, autoplace, place_with, terrain_model};
 pub use octree::{Cell, Octree, OctreeParams, View};

@@ -265,6 +265,20 @@ impl Octree {
         self.compact();
     }
 
+    /// The same model with every unknown cell taken as free: what a planner that treats missing
+    /// data as empty space would use (for evaluation only; AutoPlace never does).
+    pub fn unknown_as_free(&self) -> Octree {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|n| match n {
+                Node::Leaf(Cell::Unknown) => Node::Leaf(Cell::Free),
+                other => *other,
+            })
+            .collect();
+        Octree { params: self.params.clone(), nodes }
+    }
+
     /// The state of leaf (i, j, k).
     pub fn leaf(&self, ijk: [usize; 3]) -> Cell {
         let mut node = 0usize;

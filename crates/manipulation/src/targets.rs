@@ -11,13 +11,20 @@
 //! footprint radius; its normal, oriented up, is the surface normal.
 //!
 //! Departures, with their reasons:
-//! - Roughness is the span between the 2nd and 98th percentiles of the heights above the fitted
-//!   plane rather than the full maximum minus minimum: the Hazcams' range noise at 0.5-1 m (a few
-//!   millimetres, with rare centimetre blunders next to occluding edges) would otherwise decide
-//!   the maximum alone; relief larger than the noise still spans the percentiles.
+//! - Roughness is the maximum minus the minimum of the mean heights above the fitted plane in
+//!   1 cm cells of the plane (cells with two points or more), not of the raw points: the
+//!   Hazcams' range noise at 0.5-1 m (a few millimetres, with rare centimetre blunders) would
+//!   otherwise decide the maximum alone; relief larger than a cell (a rim, a step) still shows.
+//! - Curvature: the normal of a wider patch ([`TargetParams::curvature_radius`]) must agree with
+//!   the patch's within [`TargetParams::max_bend_deg`], else the candidate counts as rough. The
+//!   paper's roughness is a height span; on a rock's rounded rim the span over 3 cm stays small
+//!   while the contact plate would rock, and the stereo normal there was off by more than 10 deg.
+//! - A patch must hold points in each eighth of its outer half: a candidate on a rock's rim
+//!   whose far side the cameras cannot see would otherwise fit the visible top alone.
 //! - A candidate is refused for its normal when no direction within 10 deg of the normal comes
-//!   within the arm's approach cone (instruments point at most [`TargetParams::max_tilt_deg`]
-//!   from straight down): the arm works from above.
+//!   within the arm's approach cone (instruments point at most [`TargetParams::max_tilt_deg`],
+//!   35 deg, from straight down): the arm works from above, and on steeper faces (rocks' sides)
+//!   the stereo normal of a 3 cm patch was off by more than 10 deg in `rovernav eval autoplace`.
 
 use crate::geometry::V3;
 use nalgebra::{Matrix3, SymmetricEigen};
@@ -38,6 +45,10 @@ pub struct TargetParams {
     pub min_points: usize,
     /// Largest roughness accepted (m).
     pub max_roughness: f64,
+    /// Radius of the wider patch the curvature test fits (m).
+    pub curvature_radius: f64,
+    /// Largest angle between the patch's normal and the wider patch's (deg).
+    pub max_bend_deg: f64,
     /// Largest angle between an approach and straight down the arm can use (deg).
     pub max_tilt_deg: f64,
     /// Largest angle between the approach and the surface normal (deg): the contact sensors'.
@@ -50,10 +61,12 @@ impl Default for TargetParams {
             max_offset: 0.10,
             spacing: 0.02,
             search_radius: 0.06,
-            patch_radius: 0.04,
-            min_points: 20,
-            max_roughness: 0.02,
-            max_tilt_deg: 60.0,
+            patch_radius: 0.03,
+            min_points: 15,
+            max_roughness: 0.015,
+            curvature_radius: 0.05,
+            max_bend_deg: 6.0,
+            max_tilt_deg: 35.0,
             approach_tolerance_deg: 10.0,
         }
     }
@@ -186,35 +199,82 @@ impl Surface {
         if ids.len() < params.min_points {
             return Err(Rejection::NoData);
         }
-        let n = ids.len() as f64;
-        let mean = ids.iter().fold(V3::zeros(), |a, &i| a + self.points[i]) / n;
-        let mut cov = Matrix3::zeros();
+        let (mean, normal) = self.plane(&ids);
+        let (e1, e2) = {
+            let helper = if normal.x.abs() < 0.9 { V3::x() } else { V3::y() };
+            let e1 = normal.cross(&helper).normalize();
+            (e1, normal.cross(&e1))
+        };
+        // Roughness: the span of the mean heights above the plane in 1 cm cells of the plane.
+        let mut cells: std::collections::HashMap<(i64, i64), (f64, usize)> = Default::default();
         for &i in &ids {
             let d = self.points[i] - mean;
-            cov += d * d.transpose();
+            let key = ((d.dot(&e1) / 0.01).floor() as i64, (d.dot(&e2) / 0.01).floor() as i64);
+            let e = cells.entry(key).or_default();
+            e.0 += d.dot(&normal);
+            e.1 += 1;
         }
-        let eig = SymmetricEigen::new(cov / n);
-        let smallest = eig.eigenvalues.imin();
-        let mut normal: V3 = eig.eigenvectors.column(smallest).into();
-        if normal.z < 0.0 {
-            normal = -normal;
-        }
-        let mut heights: Vec<f64> = ids.iter().map(|&i| (self.points[i] - mean).dot(&normal)).collect();
-        heights.sort_by(f64::total_cmp);
-        let at = |q: f64| heights[((q * (heights.len() - 1) as f64).round() as usize).min(heights.len() - 1)];
-        let roughness = at(0.98) - at(0.02);
-        let tilt = normal.z.clamp(-1.0, 1.0).acos().to_degrees();
+        let means: Vec<f64> = cells.values().filter(|(_, n)| *n >= 2).map(|(s, n)| s / *n as f64).collect();
+        let roughness = if means.len() >= 3 {
+            means.iter().copied().fold(f64::MIN, f64::max) - means.iter().copied().fold(f64::MAX, f64::min)
+        } else {
+            let h: Vec<f64> = ids.iter().map(|&i| (self.points[i] - mean).dot(&normal)).collect();
+            h.iter().copied().fold(f64::MIN, f64::max) - h.iter().copied().fold(f64::MAX, f64::min)
+        };
         // A point on the plane under p (the sensed point itself carries its noise).
         let point = p - normal * (p - mean).dot(&normal);
         let candidate =
             Candidate { point: point.into(), normal: normal.into(), roughness, support: ids.len() };
+        // Every eighth of the patch's outer half must hold a point: a patch seen only in part
+        // (the far side of a rock's rim, a dropout) is missing data, not a smooth surface.
+        let mut sectors = [false; 8];
+        for &i in &ids {
+            let d = self.points[i] - p;
+            let (u, v) = (d.dot(&e1), d.dot(&e2));
+            if u.hypot(v) > 0.5 * params.patch_radius {
+                let k = ((v.atan2(u) + std::f64::consts::PI) / std::f64::consts::FRAC_PI_4) as usize;
+                sectors[k.min(7)] = true;
+            }
+        }
+        if !sectors.iter().all(|s| *s) {
+            return Err(Rejection::NoData);
+        }
+        // A curved surface (a rock's rim or a small rock's whole top) fits a different plane at
+        // a larger scale: the contact plate would not sit flat. Counted as roughness.
+        let wide: Vec<usize> = self
+            .near(p, params.curvature_radius)
+            .into_iter()
+            .filter(|&i| (self.points[i] - p).norm() < params.curvature_radius)
+            .collect();
+        let (_, wide_normal) = self.plane(&wide);
+        let bend = wide_normal.angle(&normal).to_degrees();
+        let tilt = normal.z.clamp(-1.0, 1.0).acos().to_degrees();
         if tilt - params.approach_tolerance_deg > params.max_tilt_deg {
             return Err(Rejection::Normal);
         }
-        if roughness > params.max_roughness {
+        if roughness > params.max_roughness || bend > params.max_bend_deg {
             return Err(Rejection::Roughness);
         }
         Ok(candidate)
+    }
+}
+
+impl Surface {
+    /// Least-squares plane (principal axes) of the points `ids`: centroid and upward normal.
+    fn plane(&self, ids: &[usize]) -> (V3, V3) {
+        let n = ids.len().max(1) as f64;
+        let mean = ids.iter().fold(V3::zeros(), |a, &i| a + self.points[i]) / n;
+        let mut cov = Matrix3::zeros();
+        for &i in ids {
+            let d = self.points[i] - mean;
+            cov += d * d.transpose();
+        }
+        let eig = SymmetricEigen::new(cov / n);
+        let mut normal: V3 = eig.eigenvectors.column(eig.eigenvalues.imin()).into();
+        if normal.z < 0.0 {
+            normal = -normal;
+        }
+        (mean, normal)
     }
 }
 
@@ -258,13 +318,18 @@ mod tests {
     #[test]
     fn steep_rough_and_empty_patches_are_rejected_with_their_reason() {
         let p = TargetParams::default();
-        // 75 deg tilt: beyond 60 + 10.
-        let steep = Surface::new(&plane(3.8, 0.0, 0.0, 2));
-        let on = steep.closest(&V3::new(0.75, 0.0, 3.8 * 0.75 + 0.02), 0.1).unwrap();
+        // 50 deg tilt: beyond 35 + 10.
+        let steep = Surface::new(&plane(1.2, 0.0, 0.0, 2));
+        let on = steep.closest(&V3::new(0.75, 0.0, 1.2 * 0.75 + 0.02), 0.1).unwrap();
         assert_eq!(steep.evaluate(&on, &p), Err(Rejection::Normal));
         let at = V3::new(0.75, 0.0, 0.02);
         let rough = Surface::new(&plane(0.0, 0.0, 0.02, 3));
         assert_eq!(rough.evaluate(&at, &p), Err(Rejection::Roughness));
+        // Half a patch: the edge of the sensed area.
+        let half: Vec<[f32; 3]> = plane(0.0, 0.0, 0.0, 5).into_iter().filter(|p| p[0] < 0.75).collect();
+        let edge = Surface::new(&half);
+        let on = edge.closest(&V3::new(0.745, 0.0, 0.02), 0.1).unwrap();
+        assert_eq!(edge.evaluate(&on, &p), Err(Rejection::NoData));
         let far = V3::new(2.0, 0.0, 0.0);
         assert_eq!(rough.evaluate(&far, &p), Err(Rejection::NoData));
         assert!(rough.candidates(&far, &p).is_none());
