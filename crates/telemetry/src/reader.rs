@@ -73,10 +73,8 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
         let what = if bytes.is_empty() { "empty file" } else { "no MCAP magic at the start" };
         return Err(content(format!("not an MCAP log ({what})")));
     }
-    let stream = mcap::MessageStream::new(bytes)
-        .map_err(|error| TelemetryError::Mcap { path: path.to_path_buf(), error })?;
     let mut run = LoggedRun { path: path.to_path_buf(), ..Default::default() };
-    for item in stream {
+    for item in bounded_messages(bytes) {
         let msg = match item {
             Ok(m) => m,
             Err(e) => {
@@ -106,6 +104,35 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
         }
     }
     Ok(run)
+}
+
+/// The log's messages in file order, each record at most 64 times the log's length (64 MiB at
+/// least: a chunk decompresses to more than it takes) and within the memory ceiling
+/// (`rovernav_core::limits`): `mcap::MessageStream` applies no limit inside chunks, so a corrupt
+/// record length there made it try to allocate petabytes (found by tests/fuzz_log.rs).
+fn bounded_messages(
+    bytes: &[u8],
+) -> impl Iterator<Item = Result<mcap::Message<'static>, mcap::McapError>> + '_ {
+    use mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
+    let ceiling = usize::try_from(rovernav_core::limits::max_alloc_bytes()).unwrap_or(usize::MAX);
+    let limit = bytes.len().saturating_mul(64).max(64 << 20).min(ceiling);
+    let mut reader =
+        MessageReader::new_with_options(LinearReaderOptions::default().with_record_length_limit(limit));
+    let mut rest = bytes;
+    std::iter::from_fn(move || {
+        loop {
+            match reader.next_event()? {
+                Ok(MessageReadEvent::ReadRequest(need)) => {
+                    let n = need.min(rest.len());
+                    reader.insert(n).copy_from_slice(&rest[..n]);
+                    reader.notify_read(n);
+                    rest = &rest[n..];
+                }
+                Ok(MessageReadEvent::Message(message)) => return Some(Ok(message)),
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    })
 }
 
 fn decode<T: DeserializeOwned>(data: &[u8]) -> Result<T, String> {
