@@ -3,6 +3,7 @@
 mod bench;
 mod campaign;
 mod distributed;
+mod eval_autoplace;
 mod eval_horizon;
 mod eval_lander;
 mod eval_localization;
@@ -79,6 +80,8 @@ enum EvalCommand {
     Science(eval_science::EvalScienceArgs),
     /// Visual target tracking: approaches to a designated rock with and without VTT.
     Vtt(eval_vtt::EvalVttArgs),
+    /// AutoPlace: instrument placements on generated scenes, scored against the truth.
+    Autoplace(eval_autoplace::EvalAutoplaceArgs),
     /// Rover detection in lander images: downrange and cross-range errors at 2-10 m.
     Lander(eval_lander::EvalLanderArgs),
 }
@@ -216,6 +219,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Stereo(args))) => eval_stereo::run(args),
         Some(Command::Eval(EvalCommand::Science(args))) => eval_science::run(args),
         Some(Command::Eval(EvalCommand::Vtt(args))) => eval_vtt::run(args),
+        Some(Command::Eval(EvalCommand::Autoplace(args))) => eval_autoplace::run(args),
         Some(Command::Eval(EvalCommand::Lander(args))) => eval_lander::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Graph(args)) => graph_cmd::run(args),
