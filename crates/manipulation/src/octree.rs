@@ -59,6 +59,33 @@ pub struct View<'a> {
     pub points: &'a [[f32; 3]],
 }
 
+/// A node as stored: 0, 1, 2 are leaves (unknown, free, occupied), `3 + i` a branch whose
+/// children start at index `i` (four bytes a node).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Packed(u32);
+
+impl From<Node> for Packed {
+    fn from(n: Node) -> Self {
+        Packed(match n {
+            Node::Leaf(Cell::Unknown) => 0,
+            Node::Leaf(Cell::Free) => 1,
+            Node::Leaf(Cell::Occupied) => 2,
+            Node::Branch(first) => first + 3,
+        })
+    }
+}
+
+impl From<Packed> for Node {
+    fn from(p: Packed) -> Self {
+        match p.0 {
+            0 => Node::Leaf(Cell::Unknown),
+            1 => Node::Leaf(Cell::Free),
+            2 => Node::Leaf(Cell::Occupied),
+            i => Node::Branch(i - 3),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Node {
     Leaf(Cell),
@@ -70,7 +97,7 @@ enum Node {
 #[derive(Clone, Debug)]
 pub struct Octree {
     params: OctreeParams,
-    nodes: Vec<Node>,
+    nodes: Vec<Packed>,
 }
 
 /// Leaf index of a point along one axis (may be out of range).
@@ -171,7 +198,7 @@ fn for_each_mark(
 impl Octree {
     /// An octree with every cell unknown.
     pub fn unknown(params: OctreeParams) -> Self {
-        Self { params, nodes: vec![Node::Leaf(Cell::Unknown)] }
+        Self { params, nodes: vec![Node::Leaf(Cell::Unknown).into()] }
     }
 
     /// Builds the terrain model from stereo views: lines of sight free, points occupy.
@@ -201,49 +228,49 @@ impl Octree {
     fn set(&mut self, ijk: [usize; 3], state: Cell, force: bool) {
         let mut node = 0usize;
         for level in (0..self.params.depth).rev() {
-            if let Node::Leaf(s) = self.nodes[node] {
+            if let Node::Leaf(s) = Node::from(self.nodes[node]) {
                 if s == state || (!force && s == Cell::Occupied) {
                     return;
                 }
                 let first = self.nodes.len() as u32;
-                self.nodes.extend([Node::Leaf(s); 8]);
-                self.nodes[node] = Node::Branch(first);
+                self.nodes.extend([Packed::from(Node::Leaf(s)); 8]);
+                self.nodes[node] = Node::Branch(first).into();
             }
-            let Node::Branch(first) = self.nodes[node] else { unreachable!("split above") };
+            let Node::Branch(first) = Node::from(self.nodes[node]) else { unreachable!("split above") };
             let octant =
                 ((ijk[0] >> level) & 1) | (((ijk[1] >> level) & 1) << 1) | (((ijk[2] >> level) & 1) << 2);
             node = first as usize + octant;
         }
-        match self.nodes[node] {
+        match Node::from(self.nodes[node]) {
             Node::Leaf(Cell::Occupied) if !force => {}
-            _ => self.nodes[node] = Node::Leaf(state),
+            _ => self.nodes[node] = Node::Leaf(state).into(),
         }
     }
 
     /// Merges uniform octants and drops unreachable nodes.
     fn compact(&mut self) {
-        fn copy(src: &[Node], node: usize, out: &mut Vec<Node>, at: usize) {
-            match src[node] {
-                Node::Leaf(s) => out[at] = Node::Leaf(s),
+        fn copy(src: &[Packed], node: usize, out: &mut Vec<Packed>, at: usize) {
+            match Node::from(src[node]) {
+                Node::Leaf(s) => out[at] = Node::Leaf(s).into(),
                 Node::Branch(first) => {
                     let base = out.len();
-                    out.extend([Node::Leaf(Cell::Unknown); 8]);
+                    out.extend([Packed::from(Node::Leaf(Cell::Unknown)); 8]);
                     for i in 0..8 {
                         copy(src, first as usize + i, out, base + i);
                     }
                     let kids = &out[base..base + 8];
-                    if let Node::Leaf(s) = kids[0]
-                        && kids.iter().all(|k| *k == Node::Leaf(s))
+                    if let Node::Leaf(s) = Node::from(kids[0])
+                        && kids.iter().all(|k| *k == kids[0])
                     {
                         out.truncate(base);
-                        out[at] = Node::Leaf(s);
+                        out[at] = Node::Leaf(s).into();
                     } else {
-                        out[at] = Node::Branch(base as u32);
+                        out[at] = Node::Branch(base as u32).into();
                     }
                 }
             }
         }
-        let mut out = vec![Node::Leaf(Cell::Unknown)];
+        let mut out = vec![Packed::from(Node::Leaf(Cell::Unknown))];
         copy(&self.nodes, 0, &mut out, 0);
         self.nodes = out;
     }
@@ -271,9 +298,9 @@ impl Octree {
         let nodes = self
             .nodes
             .iter()
-            .map(|n| match n {
-                Node::Leaf(Cell::Unknown) => Node::Leaf(Cell::Free),
-                other => *other,
+            .map(|n| match Node::from(*n) {
+                Node::Leaf(Cell::Unknown) => Node::Leaf(Cell::Free).into(),
+                _ => *n,
             })
             .collect();
         Octree { params: self.params.clone(), nodes }
@@ -284,7 +311,7 @@ impl Octree {
         let mut node = 0usize;
         let mut level = self.params.depth;
         loop {
-            match self.nodes[node] {
+            match Node::from(self.nodes[node]) {
                 Node::Leaf(s) => return s,
                 Node::Branch(first) => {
                     level -= 1;
@@ -323,7 +350,7 @@ impl Octree {
         if b.distance(q) >= radius {
             return false;
         }
-        match self.nodes[node] {
+        match Node::from(self.nodes[node]) {
             Node::Leaf(Cell::Free) => false,
             Node::Leaf(_) => true,
             Node::Branch(first) => {
@@ -346,7 +373,7 @@ impl Octree {
         let mut out = [0u64; 3];
         let mut stack = vec![(0usize, self.params.depth)];
         while let Some((node, level)) = stack.pop() {
-            match self.nodes[node] {
+            match Node::from(self.nodes[node]) {
                 Node::Leaf(s) => {
                     let i = match s {
                         Cell::Occupied => 0,
@@ -368,7 +395,7 @@ impl Octree {
 
     /// Bytes held by the nodes.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>()
+        self.nodes.len() * std::mem::size_of::<Packed>()
     }
 }
 
