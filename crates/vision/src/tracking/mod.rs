@@ -16,6 +16,11 @@
 //! - The reference is re-taken from each successfully tracked image (the target's look changes
 //!   with viewpoint over a 10 m approach); only the warp between consecutive images is
 //!   compensated, never the whole approach at once.
+//! - An ambiguous match is retried with a template 1.5 times as wide before the target is
+//!   declared lost ([`Tracker::match_template`]): at 10 m a 31 px template holds a 0.3 m rock and
+//!   much ground, and ground texture repeats; the wider view seldom does. Two maxima joined by a
+//!   ridge are one peak ([`ncc::SEPARATING_DIP`]), since the paper's "second peak" means a second
+//!   place the target could be.
 //! - Magnification and roll are one similarity transform (scale and in-plane rotation); the
 //!   perspective change of a tilted surface is not modelled (small at 10 % range steps).
 
@@ -72,6 +77,8 @@ pub enum LossReason {
         score: f32,
         /// Second-best separate peak.
         second: f32,
+        /// Distance (px) between the two peaks.
+        separation_px: f64,
     },
     /// The peak is too broad to locate the target.
     Flat {
@@ -94,8 +101,8 @@ impl std::fmt::Display for LossReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::LowPeak { score } => write!(f, "correlation peak {score:.3} too low"),
-            Self::Ambiguous { score, second } => {
-                write!(f, "ambiguous: second peak {second:.3} against {score:.3}")
+            Self::Ambiguous { score, second, separation_px } => {
+                write!(f, "ambiguous: second peak {second:.3} at {separation_px:.1} px against {score:.3}")
             }
             Self::Flat { curvature } => write!(f, "correlation peak too flat (curvature {curvature:.4})"),
             Self::Jump { distance_px, allowed_px } => {
@@ -299,16 +306,37 @@ impl Tracker {
         self.match_template(step.image, &prediction, &warp)
     }
 
-    /// Matches the reference, warped by `warp`, around `prediction` in `image` and judges it.
+    /// Matches the reference, warped by `warp`, around `prediction` in `image` and judges it. An
+    /// ambiguous match is tried once more with a template 1.5 times as wide (more of the scene
+    /// around the target, which two places rarely share); the target is lost only if that is
+    /// no better.
     pub fn match_template(
         &self,
         image: &GreyF32,
         prediction: &Prediction,
         warp: &TemplateWarp,
     ) -> TrackOutcome {
+        let first = self.match_with_half(image, prediction, warp, self.params.template_half);
+        if !matches!(first, TrackOutcome::Lost { why: LossReason::Ambiguous { .. } }) {
+            return first;
+        }
+        match self.match_with_half(image, prediction, warp, self.params.template_half * 3 / 2) {
+            wider @ TrackOutcome::Tracked(_) => wider,
+            _ => first,
+        }
+    }
+
+    /// [`Tracker::match_template`] with a template of half-size `half`.
+    fn match_with_half(
+        &self,
+        image: &GreyF32,
+        prediction: &Prediction,
+        warp: &TemplateWarp,
+        half: usize,
+    ) -> TrackOutcome {
         let lost = |why| TrackOutcome::Lost { why };
         let p = &self.params;
-        let template = match resample_template(&self.reference, self.reference_pixel, p.template_half, warp) {
+        let template = match resample_template(&self.reference, self.reference_pixel, half, warp) {
             Ok(t) => t,
             Err(e) => return lost(LossReason::Unusable(e)),
         };
@@ -355,7 +383,11 @@ fn judge(p: &TrackParams, peak: Peak, prediction: &Prediction, warp: TemplateWar
         return lost(LossReason::Flat { curvature: peak.curvature });
     }
     if peak.second > p.max_second_ratio * peak.score {
-        return lost(LossReason::Ambiguous { score: peak.score, second: peak.second });
+        return lost(LossReason::Ambiguous {
+            score: peak.score,
+            second: peak.second,
+            separation_px: peak.second_distance_px,
+        });
     }
     let distance_px = (peak.x - prediction.x).hypot(peak.y - prediction.y);
     let allowed_px = (p.jump_gate * prediction.sigma_px).max(1.0);

@@ -92,6 +92,8 @@ pub struct Peak {
     pub score: f32,
     /// The best local maximum farther than the exclusion radius from the peak (-1 if none).
     pub second: f32,
+    /// Distance (px) from the peak to that second local maximum (NaN if none).
+    pub second_distance_px: f64,
     /// Sharpness: the smaller negated second difference of the scores across the peak (per
     /// px²) over the axes where both neighbours were searched; NaN if there were none.
     pub curvature: f32,
@@ -153,6 +155,19 @@ pub fn score_map(
     Ok(ScoreMap { x0: win.x_min, y0: win.y_min, width, height, scores })
 }
 
+/// Whether the scores on the segment from `a` to `b` (nearest map cells, one sample per px) fall
+/// below `level` somewhere.
+fn separated(map: &ScoreMap, a: (usize, usize), b: (usize, usize), level: f32) -> bool {
+    let (dx, dy) = (b.0 as f64 - a.0 as f64, b.1 as f64 - a.1 as f64);
+    let n = dx.abs().max(dy.abs()).ceil() as usize;
+    (1..n).any(|k| {
+        let t = k as f64 / n as f64;
+        let x = (a.0 as f64 + t * dx).round() as usize;
+        let y = (a.1 as f64 + t * dy).round() as usize;
+        map.scores[y * map.width + x] < level
+    })
+}
+
 /// Vertex offset (clamped to ±0.5) and negated second difference of a parabola through three
 /// equally spaced samples with the middle one the largest.
 pub fn parabola_vertex(minus: f32, centre: f32, plus: f32) -> (f64, f64) {
@@ -164,8 +179,14 @@ pub fn parabola_vertex(minus: f32, centre: f32, plus: f32) -> (f64, f64) {
     ((0.5 * (m - p) / second).clamp(-0.5, 0.5), -second)
 }
 
+/// Least fall (in correlation) between two local maxima for them to count as separate peaks:
+/// a maximum joined to the best by a ridge that never drops this far below it is a bump on the
+/// best peak's lobe, not a second place the template fits.
+pub const SEPARATING_DIP: f32 = 0.1;
+
 /// The best score of a map, refined to subpixel, with the best separate local maximum farther
-/// than `exclusion_px` from it; `None` for an empty map.
+/// than `exclusion_px` from it (separate: the scores on the straight line between the two fall
+/// at least [`SEPARATING_DIP`] below the lower one); `None` for an empty map.
 pub fn find_peak(map: &ScoreMap, exclusion_px: f64) -> Option<Peak> {
     let (w, h) = (map.width, map.height);
     let best = (0..w * h).max_by(|&a, &b| map.scores[a].total_cmp(&map.scores[b]))?;
@@ -187,6 +208,7 @@ pub fn find_peak(map: &ScoreMap, exclusion_px: f64) -> Option<Peak> {
     let curvature = if curvature.is_finite() { curvature as f32 } else { f32::NAN };
     let on_edge = (w > 1 && (bx == 0 || bx + 1 == w)) || (h > 1 && (by == 0 || by + 1 == h));
     let mut second = -1.0f32;
+    let mut second_distance_px = f64::NAN;
     let ex2 = exclusion_px * exclusion_px;
     for y in 0..h {
         for x in 0..w {
@@ -197,8 +219,9 @@ pub fn find_peak(map: &ScoreMap, exclusion_px: f64) -> Option<Peak> {
             }
             let local_max = (y.saturating_sub(1)..(y + 2).min(h))
                 .all(|yy| (x.saturating_sub(1)..(x + 2).min(w)).all(|xx| s(xx, yy) <= v));
-            if local_max {
+            if local_max && separated(map, (bx, by), (x, y), v - SEPARATING_DIP) {
                 second = v;
+                second_distance_px = d2.sqrt();
             }
         }
     }
@@ -207,6 +230,7 @@ pub fn find_peak(map: &ScoreMap, exclusion_px: f64) -> Option<Peak> {
         y: (map.y0 + by as i64) as f64 + dy,
         score,
         second,
+        second_distance_px,
         curvature,
         on_edge,
     })
@@ -236,6 +260,22 @@ mod tests {
         assert_eq!((peak.x.round(), peak.y.round()), (23.0, 12.0));
         assert!((peak.score - 1.0).abs() < 1e-5);
         assert!(peak.second < peak.score);
+    }
+
+    #[test]
+    fn a_bump_on_the_ridge_of_the_best_peak_is_not_a_second_peak() {
+        // Scores along one row: the best peak at 2, a shoulder at 8 joined to it by a ridge
+        // that never falls 0.1 below the shoulder, and a separate peak at 14 behind a valley.
+        let row = [0.2, 0.6, 0.95, 0.9, 0.88, 0.86, 0.85, 0.86, 0.87, 0.8, 0.5, 0.2, 0.4, 0.7, 0.8, 0.6, 0.3];
+        let map = ScoreMap { x0: 0, y0: 0, width: row.len(), height: 1, scores: row.to_vec() };
+        let peak = find_peak(&map, 3.0).unwrap();
+        assert_eq!(peak.second, 0.8);
+        assert_eq!(peak.second_distance_px, 12.0);
+        // Without the valley, the shoulder (0.87) would have been the second peak.
+        let mut ridge = row;
+        ridge[10..14].copy_from_slice(&[0.79, 0.78, 0.79, 0.76]);
+        let map = ScoreMap { x0: 0, y0: 0, width: ridge.len(), height: 1, scores: ridge.to_vec() };
+        assert_eq!(find_peak(&map, 3.0).unwrap().second, -1.0);
     }
 
     #[test]
