@@ -263,7 +263,17 @@ impl CampaignSpec {
             message.push_str(&e.message().replace('\n', " "));
             CampaignError::Parse { path: origin.into(), message }
         })?;
-        spec.validate(origin)?;
+        // The field's line, as mission errors give it (rovernav_executive::mission::check).
+        spec.validate(origin).map_err(|e| match e {
+            CampaignError::Invalid { path, field, message } => {
+                let message = match rovernav_executive::mission::check::line_of(text, &field) {
+                    Some(line) => format!("line {line}: {message}"),
+                    None => message,
+                };
+                CampaignError::Invalid { path, field, message }
+            }
+            other => other,
+        })?;
         Ok(spec)
     }
 
@@ -523,6 +533,12 @@ mod tests {
             let e = err(text);
             assert!(e.contains("c.toml") && e.contains(&format!("`{field}`")), "{text}: {e}");
         }
+    }
+
+    #[test]
+    fn invalid_values_give_their_line() {
+        let e = err("name = \"x\"\n[yard]\ncraters_per_hectare = 1e9\n");
+        assert!(e.contains("`yard.craters_per_hectare`: line 3: "), "{e}");
     }
 
     #[test]

@@ -36,6 +36,24 @@ pub fn positive_up_to(v: f64, max: f64, unit: &str) -> Result<(), String> {
     }
 }
 
+/// The 1-based line holding the key of a dotted `field` (`goal.waypoints[0]` looks for
+/// `waypoints =`) when exactly one line of `text` does.
+pub fn line_of(text: &str, field: &str) -> Option<usize> {
+    let key = field.rsplit('.').next().unwrap_or(field).split('[').next().unwrap_or_default();
+    let lines: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            l.trim_start().strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map(|(i, _)| i + 1)
+        .collect();
+    match lines.as_slice() {
+        [line] if !key.is_empty() => Some(*line),
+        _ => None,
+    }
+}
+
 /// A number as a message shows it: in scientific notation when huge (`1e308`, not 309 digits).
 fn shown(v: f64) -> String {
     if v.is_finite() && v.abs() >= 1.0e9 { format!("{v:e}") } else { v.to_string() }

@@ -138,18 +138,9 @@ pub enum MissionError {
 /// An invalid-field error with the line of the field's key in `text` when one line holds it.
 fn with_line(error: MissionError, text: &str) -> MissionError {
     let MissionError::Invalid { path, field, message } = error else { return error };
-    let key = field.rsplit('.').next().unwrap_or(&field).split('[').next().unwrap_or_default();
-    let lines: Vec<usize> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| {
-            l.trim_start().strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('='))
-        })
-        .map(|(i, _)| i + 1)
-        .collect();
-    let message = match lines.as_slice() {
-        [line] if !key.is_empty() => format!("line {line}: {message}"),
-        _ => message,
+    let message = match check::line_of(text, &field) {
+        Some(line) => format!("line {line}: {message}"),
+        None => message,
     };
     MissionError::Invalid { path, field, message }
 }
