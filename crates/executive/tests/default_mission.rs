@@ -12,6 +12,13 @@ fn default_mission_reaches_the_goal_without_hazard_contact_and_is_deterministic(
     assert_eq!(r.hazard_contacts, 0);
     // Truth, not belief: the true rover ends near the goal.
     assert!(r.goal_error_m < 1.5, "true goal error {} m", r.goal_error_m);
+    // The message says both: the estimate's arrival and the true error the simulator measured.
+    let (estimate, truth) = r.message.split_once("; true error ").expect("both errors in the message");
+    assert!(estimate.starts_with("estimate within "), "{}", r.message);
+    assert_eq!(truth, format!("{:.2} m", r.goal_error_m));
+    let tolerance = mission.goal.tolerance_m;
+    let within: f64 = estimate["estimate within ".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(within <= tolerance, "the navigator stopped with its estimate {within} m from the goal");
     let optimal = r.optimal_length_m.expect("the default yard has a safe path");
     assert!(optimal >= r.straight_line_m - 1e-6);
     assert!(r.distance_driven_m >= optimal * 0.95, "drove {} m, optimal {} m", r.distance_driven_m, optimal);

@@ -415,7 +415,7 @@ impl Navigator for GridNavigator {
         if here.dist(goal) <= input.goal.tolerance {
             return NavCommand::Finish(
                 Outcome::Reached,
-                format!("within {:.2} m of the goal", here.dist(goal)),
+                format!("estimate within {:.2} m of the goal", here.dist(goal)),
             );
         }
         if let Some(why) = &input.frame.motion_stopped {

@@ -295,7 +295,7 @@ impl Navigator for NatNavigator {
         }
         let d = here.dist(goal);
         if d <= input.goal.tolerance {
-            return NavCommand::Finish(Outcome::Reached, format!("within {d:.2} m of the goal"));
+            return NavCommand::Finish(Outcome::Reached, format!("estimate within {d:.2} m of the goal"));
         }
         if let Some(why) = &input.frame.motion_stopped
             && why.starts_with("hazard")

@@ -313,7 +313,7 @@ impl Navigator for Sr2Navigator {
             if self.target_index + 1 == targets.len() {
                 return NavCommand::Finish(
                     Outcome::Reached,
-                    format!("within {:.2} m of the goal", here.dist(goal.position)),
+                    format!("estimate within {:.2} m of the goal", here.dist(goal.position)),
                 );
             }
             self.target_index += 1;

@@ -309,10 +309,12 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(report)?);
     } else {
         println!(
-            "{}: {} ({}) · goal error {:.2} m · driven {:.1} m (optimal {}) · hazard contacts {} · {} cycles · {:.0} s simulated · {:.1} s wall",
+            "{}: {} ({}; {}, {}) · goal error {:.2} m · driven {:.1} m (optimal {}) · hazard contacts {} · {} cycles · {:.0} s simulated · {:.1} s wall",
             report.mission,
             report.outcome,
+            report.message,
             report.navigator,
+            report.localizer,
             report.goal_error_m,
             report.distance_driven_m,
             report.optimal_length_m.map_or("n/a".to_string(), |v| format!("{v:.1} m")),
