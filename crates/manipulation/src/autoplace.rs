@@ -7,6 +7,8 @@
 //! from the targeting view only (the "ultimate" pair); each candidate's normal and roughness;
 //! then reachability and a safe trajectory. The first feasible candidate is placed.
 //!
+//! A second view's points, when given, check each candidate's normal (see [`crate::targets`]).
+//!
 //! A refusal reports the furthest stage any candidate reached: no_data (no sensed point near
 //! the target, or too few around every candidate) < normal < roughness < reach < collision.
 
@@ -104,16 +106,18 @@ pub fn terrain_model(arm: &Arm, views: &[View], params: &OctreeParams) -> Octree
 }
 
 /// Runs AutoPlace: `views` build the terrain model, `targeting` (the ultimate pair's points)
-/// chooses the target near `commanded` (body frame, m). Returns the outcome and the model.
+/// chooses the target near `commanded` (body frame, m), `check` (another pair's points, if
+/// any) must agree with each candidate's normal. Returns the outcome and the model.
 pub fn autoplace(
     arm: &Arm,
     views: &[View],
     targeting: &[[f32; 3]],
+    check: Option<&[[f32; 3]]>,
     commanded: &V3,
     params: &AutoPlaceParams,
 ) -> (Outcome, Octree) {
     let tree = terrain_model(arm, views, &params.octree);
-    let outcome = place_with(arm, &tree, targeting, commanded, params);
+    let outcome = place_with(arm, &tree, targeting, check, commanded, params);
     (outcome, tree)
 }
 
@@ -122,16 +126,30 @@ pub fn place_with(
     arm: &Arm,
     tree: &Octree,
     targeting: &[[f32; 3]],
+    check: Option<&[[f32; 3]]>,
     commanded: &V3,
     params: &AutoPlaceParams,
 ) -> Outcome {
     let surface = Surface::new(targeting);
+    let second = check.map(Surface::new);
     let Some(candidates) = surface.candidates(commanded, &params.targets) else {
         return Outcome::Refused { reason: Reason::NoData, examined: 0 };
     };
     let mut furthest = Reason::NoData;
     for (i, p) in candidates.iter().enumerate() {
-        let c = match surface.evaluate(p, &params.targets) {
+        let checked = surface.evaluate(p, &params.targets).and_then(|c| match &second {
+            None => Ok(c),
+            Some(s) => match s.normal_at(&V3::from(c.point), &params.targets) {
+                None => Err(Rejection::NoData),
+                Some(n)
+                    if n.angle(&V3::from(c.normal)).to_degrees() > params.targets.max_disagreement_deg =>
+                {
+                    Err(Rejection::Normal)
+                }
+                Some(_) => Ok(c),
+            },
+        });
+        let c = match checked {
             Ok(c) => c,
             Err(r) => {
                 furthest = furthest.max(match r {
@@ -149,4 +167,39 @@ pub fn place_with(
         }
     }
     Outcome::Refused { reason: furthest, examined: candidates.len() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rovernav_core::RoverConfig;
+
+    /// Level ground (or tilted by `slope`) every centimetre, seen from high above.
+    fn ground(slope: f32) -> Vec<[f32; 3]> {
+        let mut pts = Vec::new();
+        for i in 0..140 {
+            for j in 0..140 {
+                let x = i as f32 * 0.012;
+                pts.push([x, -0.7 + j as f32 * 0.01, slope * (x - 0.95)]);
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_second_view_that_disagrees_or_saw_nothing_refuses_the_candidate() {
+        let arm = Arm::new(&RoverConfig::default());
+        let cams = [V3::new(0.9, 0.0, 1.5), V3::new(0.9, -0.2, 1.5)];
+        let pts = ground(0.0);
+        let views = [View { cameras: &cams, points: &pts }];
+        let params = AutoPlaceParams::default();
+        let target = V3::new(0.95, 0.0, 0.0);
+        let run = |check: Option<&[[f32; 3]]>| autoplace(&arm, &views, &pts, check, &target, &params).0;
+        assert!(matches!(run(None), Outcome::Placed { .. }));
+        assert!(matches!(run(Some(&pts)), Outcome::Placed { .. }));
+        // 0.2 rise per metre: 11 deg off the targeting view's level normal.
+        assert_eq!(run(Some(&ground(0.2))).reason(), Some(Reason::Normal));
+        let elsewhere: Vec<[f32; 3]> = pts.iter().filter(|p| p[0] < 0.5).copied().collect();
+        assert_eq!(run(Some(&elsewhere)).reason(), Some(Reason::NoData));
+    }
 }

@@ -23,8 +23,12 @@
 //!   whose far side the cameras cannot see would otherwise fit the visible top alone.
 //! - A candidate is refused for its normal when no direction within 10 deg of the normal comes
 //!   within the arm's approach cone (instruments point at most [`TargetParams::max_tilt_deg`],
-//!   35 deg, from straight down): the arm works from above, and on steeper faces (rocks' sides)
-//!   the stereo normal of a 3 cm patch was off by more than 10 deg in `rovernav eval autoplace`.
+//!   25 deg, from straight down): the arm works from above, and on steeper faces (rocks' sides
+//!   facing the Hazcams) the stereo normal of a 3 cm patch was off by more than 10 deg in
+//!   `rovernav eval autoplace` (4 of 51 placements at 35 deg).
+//! - A second view (the Navcam pair in the evaluation) may check a candidate: its own plane
+//!   through the same patch must agree within [`TargetParams::max_disagreement_deg`] (else
+//!   the candidate's normal is refused), and a patch it did not sense is missing data.
 
 use crate::geometry::V3;
 use nalgebra::{Matrix3, SymmetricEigen};
@@ -49,6 +53,8 @@ pub struct TargetParams {
     pub curvature_radius: f64,
     /// Largest angle between the patch's normal and the wider patch's (deg).
     pub max_bend_deg: f64,
+    /// Largest angle between the normal and a second view's normal of the same patch (deg).
+    pub max_disagreement_deg: f64,
     /// Largest angle between an approach and straight down the arm can use (deg).
     pub max_tilt_deg: f64,
     /// Largest angle between the approach and the surface normal (deg): the contact sensors'.
@@ -66,7 +72,8 @@ impl Default for TargetParams {
             max_roughness: 0.015,
             curvature_radius: 0.05,
             max_bend_deg: 6.0,
-            max_tilt_deg: 35.0,
+            max_disagreement_deg: 6.0,
+            max_tilt_deg: 25.0,
             approach_tolerance_deg: 10.0,
         }
     }
@@ -260,6 +267,17 @@ impl Surface {
 }
 
 impl Surface {
+    /// The normal of this surface's points within the patch radius of `p` (a second view's
+    /// opinion of a candidate), `None` with too few points.
+    pub fn normal_at(&self, p: &V3, params: &TargetParams) -> Option<V3> {
+        let ids: Vec<usize> = self
+            .near(p, params.patch_radius)
+            .into_iter()
+            .filter(|&i| (self.points[i] - p).norm() < params.patch_radius)
+            .collect();
+        (ids.len() >= params.min_points).then(|| self.plane(&ids).1)
+    }
+
     /// Least-squares plane (principal axes) of the points `ids`: centroid and upward normal.
     fn plane(&self, ids: &[usize]) -> (V3, V3) {
         let n = ids.len().max(1) as f64;
@@ -318,7 +336,7 @@ mod tests {
     #[test]
     fn steep_rough_and_empty_patches_are_rejected_with_their_reason() {
         let p = TargetParams::default();
-        // 50 deg tilt: beyond 35 + 10.
+        // 50 deg tilt: beyond 25 + 10.
         let steep = Surface::new(&plane(1.2, 0.0, 0.0, 2));
         let on = steep.closest(&V3::new(0.75, 0.0, 1.2 * 0.75 + 0.02), 0.1).unwrap();
         assert_eq!(steep.evaluate(&on, &p), Err(Rejection::Normal));

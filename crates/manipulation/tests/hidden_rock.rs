@@ -87,7 +87,7 @@ fn a_dropout_hiding_a_rock_in_the_arms_path_makes_autoplace_refuse() {
 
     // The clear scene: placed.
     let clear = views(None, None);
-    let (outcome, _) = autoplace(&arm, &as_views(&clear), &clear[0].1, &target, &params);
+    let (outcome, _) = autoplace(&arm, &as_views(&clear), &clear[0].1, None, &target, &params);
     let Outcome::Placed { plan, .. } = outcome else { panic!("clear scene refused: {outcome:?}") };
 
     // The rock goes under the lowest point of that path more than 15 cm from the target,
@@ -111,7 +111,7 @@ fn a_dropout_hiding_a_rock_in_the_arms_path_makes_autoplace_refuse() {
 
     // Missing data taken as free space: a path through the rock.
     let naive_tree = terrain_model(&arm, &hidden_views, &params.octree).unknown_as_free();
-    let naive = place_with(&arm, &naive_tree, &hidden[0].1, &target, &params);
+    let naive = place_with(&arm, &naive_tree, &hidden[0].1, None, &target, &params);
     let Outcome::Placed { plan: naive_plan, .. } = naive else {
         panic!("the naive planner refused: {naive:?}")
     };
@@ -123,7 +123,7 @@ fn a_dropout_hiding_a_rock_in_the_arms_path_makes_autoplace_refuse() {
     assert!(through_rock, "the naive path meets the hidden rock");
 
     // AutoPlace: refused for collision, nothing moves.
-    let (outcome, tree) = autoplace(&arm, &hidden_views, &hidden[0].1, &target, &params);
+    let (outcome, tree) = autoplace(&arm, &hidden_views, &hidden[0].1, None, &target, &params);
     assert_eq!(outcome.reason(), Some(Reason::Collision), "{outcome:?}");
     // The rock's volume is not free in the model.
     let inside = V3::new(rock.centre[0], rock.centre[1], 0.5 * rock.height);

@@ -186,7 +186,7 @@ fn trial(seed: u64, imaging: &sensing::Imaging) -> Trial {
         let tree =
             rovernav_manipulation::terrain_model(&arm, &views(&pairs), &params.octree).unknown_as_free();
         if let Outcome::Placed { plan, .. } =
-            place_with(&arm, &tree, &pairs[0].points, &scene.target, &params)
+            place_with(&arm, &tree, &pairs[0].points, Some(&pairs[2].points), &scene.target, &params)
             && let Some(p) = lowest_path_point(&arm, &plan, &scene.target)
         {
             scene::hide_rock(&mut scene, p, 0.05);
@@ -195,9 +195,17 @@ fn trial(seed: u64, imaging: &sensing::Imaging) -> Trial {
     }
     let terrain = scene.terrain();
     let pairs = sensing::sense(&scene, &terrain, &rover, &arm.rover, imaging);
-    let (outcome, tree) = autoplace(&arm, &views(&pairs), &pairs[0].points, &scene.target, &params);
+    let (outcome, tree) =
+        autoplace(&arm, &views(&pairs), &pairs[0].points, Some(&pairs[2].points), &scene.target, &params);
     let naive = hidden_ready.then(|| {
-        match place_with(&arm, &tree.unknown_as_free(), &pairs[0].points, &scene.target, &params) {
+        match place_with(
+            &arm,
+            &tree.unknown_as_free(),
+            &pairs[0].points,
+            Some(&pairs[2].points),
+            &scene.target,
+            &params,
+        ) {
             Outcome::Placed { plan, .. } => {
                 let e = truth::execute(&arm, &terrain.dem, &plan);
                 if e.collision.is_some() { "collided".to_string() } else { "placed".to_string() }

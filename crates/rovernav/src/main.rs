@@ -14,6 +14,7 @@ mod eval_vtt;
 mod graph_cmd;
 mod interactive;
 mod output;
+mod progress;
 mod render_cmd;
 mod replay;
 mod science_cmd;
@@ -291,9 +292,19 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
             .progress_chars("=> "),
     );
     bar.set_message(format!("{} / {}", mission.name, mission.navigator));
+    let mut plain = progress::PlainProgress::for_stderr();
     let mut on_progress = |p: &rovernav_executive::Progress| {
         bar.set_position((p.time_fraction * 1000.0) as u64);
         bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
+        plain.tick(|| {
+            format!(
+                "{}: cycle {} · {:.1} m to goal · {:.0} % of the time budget",
+                mission.name,
+                p.cycles,
+                p.distance_to_goal_m,
+                100.0 * p.time_fraction
+            )
+        });
     };
     // The world is built before telemetry.mcap is created, so a mission that cannot be built
     // leaves no log; every topic of the run goes to the log, finished even when the run fails.
