@@ -3,42 +3,18 @@
 //! chunk size or grid size overwritten with a huge value, is read and replayed without a panic
 //! or an abort. `PROPTEST_CASES` sets the cases.
 
+mod common;
+
 use proptest::prelude::*;
-use rovernav_executive::{Run, RunSettings, long_yard_world};
-use rovernav_telemetry::{FlushPolicy, TelemetryRecorder, TelemetryWriter, mcap, parse_log};
-use std::io::Cursor;
+use rovernav_telemetry::parse_log;
 use std::sync::OnceLock;
-use std::time::Duration;
 
 /// The seed logs: one lz4 log of a short traverse and its zstd re-encoding.
 fn seeds() -> &'static [Vec<u8>; 2] {
     static SEEDS: OnceLock<[Vec<u8>; 2]> = OnceLock::new();
     SEEDS.get_or_init(|| {
-        let path = std::env::temp_dir().join(format!("rovernav-fuzz-log-{}.mcap", std::process::id()));
-        let policy = FlushPolicy { max_interval: Duration::from_secs(3600), max_chunk_bytes: 16 * 1024 };
-        let mut recorder = TelemetryRecorder::new(TelemetryWriter::create(&path, policy).unwrap()).unwrap();
-        let settings = RunSettings {
-            navigator: "astar-grid".into(),
-            localizer: "dead-reckoning".into(),
-            seed: 3,
-            time_limit_s: 3600.0,
-            max_cycles: 40,
-            name: "fuzz-yard".into(),
-            navigator_params: Default::default(),
-        };
-        Run::new(long_yard_world(3, 4.0, 3.0, 1.0), settings).observer(&mut recorder).execute().unwrap();
-        recorder.finish().unwrap();
-        let lz4 = std::fs::read(&path).unwrap();
-        let _ = std::fs::remove_file(&path);
-        let mut zstd = Cursor::new(Vec::new());
-        let mut writer =
-            mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).create(&mut zstd).unwrap();
-        for message in mcap::MessageStream::new(&lz4).unwrap() {
-            writer.write(&message.unwrap()).unwrap();
-        }
-        writer.finish().unwrap();
-        drop(writer);
-        [lz4, zstd.into_inner()]
+        let (lz4, zstd) = common::lz4_and_zstd_logs("fuzz", 40, 16 * 1024);
+        [lz4, zstd]
     })
 }
 
