@@ -7,6 +7,7 @@
 //! - [`matching`]: terrain map matching: maximum likelihood with branch and bound (paper 000
 //!   section 4) and partial Hausdorff (paper 002 section 3).
 //! - [`lander`]: the rover's position from the lander's stereo sighting (paper 002 section 2).
+//! - [`orbital`]: matching the rover's panorama map against an orbital DEM (paper 002 section 5).
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
@@ -24,6 +25,7 @@ pub mod ekf_ml;
 pub mod evaluation;
 pub mod lander;
 pub mod matching;
+pub mod orbital;
 pub mod synthetic;
 pub mod target;
 

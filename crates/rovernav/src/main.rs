@@ -7,6 +7,7 @@ mod eval_autoplace;
 mod eval_horizon;
 mod eval_lander;
 mod eval_localization;
+mod eval_orbital;
 mod eval_science;
 mod eval_stereo;
 mod eval_terrain;
@@ -85,6 +86,8 @@ enum EvalCommand {
     Autoplace(eval_autoplace::EvalAutoplaceArgs),
     /// Rover detection in lander images: downrange and cross-range errors at 2-10 m.
     Lander(eval_lander::EvalLanderArgs),
+    /// Orbital-map localisation: the mast panorama's map matched against the Gale DEM at an orbital resolution.
+    Orbital(eval_orbital::EvalOrbitalArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -222,6 +225,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Vtt(args))) => eval_vtt::run(args),
         Some(Command::Eval(EvalCommand::Autoplace(args))) => eval_autoplace::run(args),
         Some(Command::Eval(EvalCommand::Lander(args))) => eval_lander::run(args),
+        Some(Command::Eval(EvalCommand::Orbital(args))) => eval_orbital::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Graph(args)) => graph_cmd::run(args),
         Some(Command::Campaign(args)) => campaign::run(args),
