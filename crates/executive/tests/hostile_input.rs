@@ -113,6 +113,15 @@ fn navigator_parameters_that_are_not_finite_are_refused() {
     assert!(e.contains("navigator_params"), "{e}");
 }
 
+#[test]
+fn navigator_lengths_and_counts_are_bounded() {
+    // Found by the mission fuzz target: a 1e9 m map margin overflowed a grid allocation.
+    for (line, field) in [("map_margin_m = 1e9", "map_margin_m"), ("patience = 1e12", "patience")] {
+        let e = refused(&with_table(&format!("[navigator_params]\n{line}")));
+        assert!(e.contains(&format!("`navigator_params.{field}`")), "{line}: {e}");
+    }
+}
+
 #[cfg(unix)]
 #[test]
 fn dem_path_that_is_a_fifo_is_refused_without_blocking() {

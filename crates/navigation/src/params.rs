@@ -12,9 +12,9 @@ pub type NavigatorParams = BTreeMap<String, f64>;
 /// What a parameter's value means, which fixes its valid range and its conversion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Unit {
-    /// A length or distance, zero or more (m).
+    /// A length or distance, zero or more, at most [`MAX_METRES`] (m).
     Metres,
-    /// A length that must be positive (m).
+    /// A length that must be positive, at most [`MAX_METRES`] (m).
     PositiveMetres,
     /// A map cell size, from 2 cm to 1 m (finer maps would not fit in memory).
     CellSize,
@@ -22,7 +22,7 @@ pub enum Unit {
     Degrees,
     /// A fraction in (0, 1].
     Fraction,
-    /// A whole number, zero or more.
+    /// A whole number, zero or more, at most [`MAX_COUNT`].
     Count,
     /// A weight or gain, zero or more.
     Weight,
@@ -34,17 +34,24 @@ impl Unit {
     /// How the unit reads in a parameter listing.
     pub fn label(self) -> &'static str {
         match self {
-            Unit::Metres => "m, >= 0",
-            Unit::PositiveMetres => "m, > 0",
+            Unit::Metres => "m, 0..1000",
+            Unit::PositiveMetres => "m, > 0, <= 1000",
             Unit::CellSize => "m, 0.02..1",
             Unit::Degrees => "deg, 0..180",
             Unit::Fraction => "fraction, (0, 1]",
-            Unit::Count => "count, whole, >= 0",
+            Unit::Count => "count, whole, 0..100000",
             Unit::Weight => ">= 0",
             Unit::Switch => "0 (off) or 1 (on)",
         }
     }
 }
+
+/// Largest length parameter (m): beyond any rover's map, so that `map_margin_m = 1e9` is an error
+/// rather than a map sized from it (issue 44: it overflowed a grid allocation).
+pub const MAX_METRES: f64 = 1000.0;
+
+/// Largest count parameter (cycles, samples, arcs...).
+pub const MAX_COUNT: f64 = 100_000.0;
 
 /// A mutable reference to the config field a parameter sets.
 pub enum Field<'a> {
@@ -229,8 +236,10 @@ pub fn apply<C: Clone>(
         };
         let ok = value.is_finite()
             && match param.unit {
-                Unit::Metres | Unit::Weight | Unit::Count => value >= 0.0,
-                Unit::PositiveMetres => value > 0.0,
+                Unit::Metres => (0.0..=MAX_METRES).contains(&value),
+                Unit::Weight => value >= 0.0,
+                Unit::Count => (0.0..=MAX_COUNT).contains(&value),
+                Unit::PositiveMetres => value > 0.0 && value <= MAX_METRES,
                 Unit::CellSize => (0.02..=1.0).contains(&value),
                 Unit::Degrees => (0.0..=180.0).contains(&value),
                 Unit::Fraction => value > 0.0 && value <= 1.0,
