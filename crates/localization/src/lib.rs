@@ -8,6 +8,7 @@
 //!   section 4) and partial Hausdorff (paper 002 section 3).
 //! - [`lander`]: the rover's position from the lander's stereo sighting (paper 002 section 2).
 //! - [`orbital`]: matching the rover's panorama map against an orbital DEM (paper 002 section 5).
+//! - [`orbital_map`]: the `orbital-map` localiser, the EKF with orbital-map fixes.
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
@@ -26,6 +27,7 @@ pub mod evaluation;
 pub mod lander;
 pub mod matching;
 pub mod orbital;
+pub mod orbital_map;
 pub mod synthetic;
 pub mod target;
 
