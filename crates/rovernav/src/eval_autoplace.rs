@@ -13,7 +13,8 @@
 //! target). Both AutoPlace and that naive planner then run on the images with the rock; the
 //! report counts AutoPlace's refusals and the naive planner's collisions in truth.
 //!
-//! Figures: `trials`, `placed`, `refused` and `refused_by_reason`, `collisions` (a placement's
+//! Figures: `trials`, `placed`, `refused` (`total` and a count per reason: `no_data`, `normal`,
+//! `roughness`, `reach`, `collision`), `collisions` (a placement's
 //! arm meeting terrain, rock, rover or itself in truth), `max_normal_error_deg` (approach
 //! against the true surface normal over every placement), `contacts_missed`,
 //! `hidden_obstacle_scenes` and `refused_on_hidden_obstacle`, and per scene kind.
@@ -98,10 +99,8 @@ pub struct AutoplaceEvaluation {
     pub trials: usize,
     /// Placements made.
     pub placed: usize,
-    /// Refusals.
-    pub refused: usize,
-    /// Refusals per reason.
-    pub refused_by_reason: BTreeMap<&'static str, usize>,
+    /// Refusals: `total` and a count per reason.
+    pub refused: BTreeMap<&'static str, usize>,
     /// Placements whose arm met terrain, rock, rover or itself in truth.
     pub collisions: usize,
     /// Largest angle between a placement's approach and the true surface normal (deg).
@@ -257,13 +256,13 @@ fn trial(seed: u64, imaging: &sensing::Imaging) -> Trial {
 /// Pools the trials.
 fn pool(trials: Vec<Trial>) -> AutoplaceEvaluation {
     let placed: Vec<&Trial> = trials.iter().filter(|t| t.outcome == "placed").collect();
-    let mut refused_by_reason: BTreeMap<&'static str, usize> =
-        Reason::ALL.iter().map(|r| (r.name(), 0)).collect();
+    let mut refused: BTreeMap<&'static str, usize> = Reason::ALL.iter().map(|r| (r.name(), 0)).collect();
     for t in &trials {
         if let Some(r) = Reason::ALL.iter().find(|r| r.name() == t.outcome) {
-            *refused_by_reason.entry(r.name()).or_default() += 1;
+            *refused.entry(r.name()).or_default() += 1;
         }
     }
+    refused.insert("total", trials.len() - placed.len());
     let errors: Vec<f64> = placed.iter().filter_map(|t| t.normal_error_deg).collect();
     let hidden: Vec<&Trial> = trials.iter().filter(|t| t.kind == Kind::HiddenRock).collect();
     let mut by_kind: BTreeMap<&'static str, KindCounts> = BTreeMap::new();
@@ -279,8 +278,7 @@ fn pool(trials: Vec<Trial>) -> AutoplaceEvaluation {
     AutoplaceEvaluation {
         trials: trials.len(),
         placed: placed.len(),
-        refused: trials.len() - placed.len(),
-        refused_by_reason,
+        refused,
         collisions: placed.iter().filter(|t| t.collision.is_some()).count(),
         max_normal_error_deg: errors.iter().copied().fold(0.0, f64::max),
         mean_normal_error_deg: if errors.is_empty() {
@@ -303,8 +301,8 @@ fn pool(trials: Vec<Trial>) -> AutoplaceEvaluation {
 fn print_table(e: &AutoplaceEvaluation) {
     println!("AutoPlace on {} generated scenes", e.trials);
     println!("  placed   {:>4}  ({:.0} %)", e.placed, 100.0 * e.placed as f64 / e.trials.max(1) as f64);
-    println!("  refused  {:>4}", e.refused);
-    for (r, n) in &e.refused_by_reason {
+    println!("  refused  {:>4}", e.refused["total"]);
+    for (r, n) in e.refused.iter().filter(|(r, _)| **r != "total") {
         println!("    {r:<10} {n:>4}");
     }
     println!("  collisions in truth            {}", e.collisions);
@@ -363,10 +361,10 @@ mod tests {
             mk(3, Kind::Dropout, "no_data", None),
             mk(4, Kind::HiddenRock, "collision", None),
         ]);
-        assert_eq!((e.trials, e.placed, e.refused), (4, 2, 2));
-        assert_eq!(e.refused_by_reason["no_data"], 1);
-        assert_eq!(e.refused_by_reason["collision"], 1);
-        assert_eq!(e.refused_by_reason.values().sum::<usize>(), e.refused);
+        assert_eq!((e.trials, e.placed, e.refused["total"]), (4, 2, 2));
+        assert_eq!(e.refused["no_data"], 1);
+        assert_eq!(e.refused["collision"], 1);
+        assert_eq!(e.refused.iter().filter(|(k, _)| **k != "total").map(|(_, n)| n).sum::<usize>(), 2);
         assert_eq!(
             (e.hidden_obstacle_scenes, e.refused_on_hidden_obstacle, e.hidden_obstacle_naive_collisions),
             (1, 1, 1)
