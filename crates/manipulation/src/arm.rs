@@ -3,7 +3,8 @@
 //! collision with itself and with the rover body.
 //!
 //! The IDD (Baumgartner et al., "The Mars Exploration Rover instrument positioning system",
-//! IEEE Aerospace 2005; Trebi-Ollennu et al., IEEE SMC 2005): five joints - azimuth (1),
+//! IEEE Aerospace 2005; "Robotic arm in-situ operations for the Mars Exploration Rovers surface
+//! mission", IEEE SMC 2005; JPL Robotics, MER manipulating arm): five joints - azimuth (1),
 //! shoulder elevation (2), elbow (3), wrist (4), turret (5) - carrying a turret of four
 //! instruments, each with a contact sensor; it reaches about 0.75-0.8 m in front of the rover at
 //! full extent, weighs about 4 kg with a 2 kg payload, stows for driving in a volume in front of
@@ -26,9 +27,10 @@
 //!   chosen for the stowed pose and elbow-up work, not the flight values (not published in the
 //!   sources above).
 //!
-//! Collision model: capsules for the upper arm, forearm, wrist link and instrument, a sphere for
-//! the turret (a 5 cm sphere); boxes for the rover (body, deck, wheels, Hazcam bar, arm bracket). Adjacent links
-//! are not checked against each other (their joint keeps them apart).
+//! Collision model: capsules for the upper arm, forearm, wrist link and instrument, a 5 cm
+//! sphere for the turret; boxes for the rover (body, deck, wheels, Hazcam bar, arm bracket).
+//! Adjacent links are not checked against each other (their joint keeps them apart). The stow
+//! volume (a box around the stowed arm grown 3 cm) holds no terrain by construction.
 //!
 //! Kinematics are written by hand rather than with the `k` crate: `k` 0.32 pulls a second
 //! nalgebra (0.30) beside the workspace's 0.35, and the closed form of this arm is a planar
