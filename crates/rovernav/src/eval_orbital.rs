@@ -85,6 +85,8 @@ pub struct OrbitalPosition {
     pub failure_probability: Option<f64>,
     /// Standard deviations of x and y from the match's covariance (m).
     pub sigma_m: Option<[f64; 2]>,
+    /// Normalised estimation error squared of the position against the match's covariance.
+    pub nees: Option<f64>,
     /// The matcher's error, if any.
     pub failure: Option<String>,
 }
@@ -108,6 +110,8 @@ pub struct OrbitalEvaluation {
     pub within_0_5m_unflagged_fraction: f64,
     /// Median heading error (deg).
     pub median_heading_error_deg: f64,
+    /// Mean NEES of the unflagged matches' positions (2 for an honest covariance).
+    pub nees_mean_unflagged: f64,
     /// The flag threshold used.
     pub flag_probability: f64,
     /// Every position.
@@ -171,6 +175,10 @@ pub fn evaluate(dem: &Dem, args: &EvalOrbitalArgs) -> anyhow::Result<OrbitalEval
         within_0_5m_unflagged_fraction: unflagged.iter().filter(|p| within(p)).count() as f64
             / unflagged.len().max(1) as f64,
         median_heading_error_deg: median(&mut headings),
+        nees_mean_unflagged: {
+            let n: Vec<f64> = unflagged.iter().filter_map(|p| p.nees).collect();
+            n.iter().sum::<f64>() / n.len().max(1) as f64
+        },
         flag_probability: args.flag_probability,
         per_position,
     })
@@ -263,6 +271,7 @@ fn position(
         heading_error_deg: None,
         failure_probability: None,
         sigma_m: None,
+        nees: None,
         failure: None,
     };
     let mut params = OrbitalParams::default();
@@ -274,6 +283,13 @@ fn position(
             heading_error_deg: Some(rovernav_core::wrap_angle(m.pose.yaw - truth.yaw).to_degrees()),
             failure_probability: Some(m.failure_probability),
             sigma_m: Some([m.covariance[0][0].sqrt(), m.covariance[1][1].sqrt()]),
+            nees: {
+                let c = &m.covariance;
+                let (ex, ey) = (m.pose.x - truth.x, m.pose.y - truth.y);
+                let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
+                (det > 0.0)
+                    .then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
+            },
             ..base
         },
         Err(e) => OrbitalPosition { failure: Some(e.to_string()), ..base },
@@ -294,6 +310,7 @@ fn print_table(e: &OrbitalEvaluation) {
     );
     println!("unflagged misses:        {}", e.unflagged_misses);
     println!("within 0.5 m, unflagged: {:.3}", e.within_0_5m_unflagged_fraction);
+    println!("mean NEES, unflagged:    {:.2} (2 for an honest covariance)", e.nees_mean_unflagged);
 }
 
 #[cfg(test)]
