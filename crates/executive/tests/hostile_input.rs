@@ -116,7 +116,13 @@ fn navigator_parameters_that_are_not_finite_are_refused() {
 #[test]
 fn navigator_lengths_and_counts_are_bounded() {
     // Found by the mission fuzz target: a 1e9 m map margin overflowed a grid allocation.
-    for (line, field) in [("map_margin_m = 1e9", "map_margin_m"), ("patience = 1e12", "patience")] {
+    // A 100 m safety buffer stalled the run for over two minutes growing hazards.
+    for (line, field) in [
+        ("map_margin_m = 1e9", "map_margin_m"),
+        ("map_margin_m = 101", "map_margin_m"),
+        ("safety_buffer_m = 100", "safety_buffer_m"),
+        ("patience = 1e12", "patience"),
+    ] {
         let e = refused(&with_table(&format!("[navigator_params]\n{line}")));
         assert!(e.contains(&format!("`navigator_params.{field}`")), "{line}: {e}");
     }

@@ -18,6 +18,9 @@ pub enum Unit {
     PositiveMetres,
     /// A map cell size, from 2 cm to 1 m (finer maps would not fit in memory).
     CellSize,
+    /// A clearance hazards are grown by, from 0 to [`MAX_CLEARANCE`] (m): the growing kernel's
+    /// cost rises with its square, so a huge one would stall the navigator.
+    Clearance,
     /// An angle from 0 to 180 degrees, stored in radians.
     Degrees,
     /// A fraction in (0, 1].
@@ -34,9 +37,10 @@ impl Unit {
     /// How the unit reads in a parameter listing.
     pub fn label(self) -> &'static str {
         match self {
-            Unit::Metres => "m, 0..1000",
-            Unit::PositiveMetres => "m, > 0, <= 1000",
+            Unit::Metres => "m, 0..100",
+            Unit::PositiveMetres => "m, > 0, <= 100",
             Unit::CellSize => "m, 0.02..1",
+            Unit::Clearance => "m, 0..2",
             Unit::Degrees => "deg, 0..180",
             Unit::Fraction => "fraction, (0, 1]",
             Unit::Count => "count, whole, 0..100000",
@@ -48,7 +52,10 @@ impl Unit {
 
 /// Largest length parameter (m): beyond any rover's map, so that `map_margin_m = 1e9` is an error
 /// rather than a map sized from it (issue 44: it overflowed a grid allocation).
-pub const MAX_METRES: f64 = 1000.0;
+pub const MAX_METRES: f64 = 100.0;
+
+/// Largest clearance hazards are grown by (m): `safety_buffer_m = 100` took over two minutes.
+pub const MAX_CLEARANCE: f64 = 2.0;
 
 /// Largest count parameter (cycles, samples, arcs...).
 pub const MAX_COUNT: f64 = 100_000.0;
@@ -241,6 +248,7 @@ pub fn apply<C: Clone>(
                 Unit::Count => (0.0..=MAX_COUNT).contains(&value),
                 Unit::PositiveMetres => value > 0.0 && value <= MAX_METRES,
                 Unit::CellSize => (0.02..=1.0).contains(&value),
+                Unit::Clearance => (0.0..=MAX_CLEARANCE).contains(&value),
                 Unit::Degrees => (0.0..=180.0).contains(&value),
                 Unit::Fraction => value > 0.0 && value <= 1.0,
                 Unit::Switch => value == 0.0 || value == 1.0,
@@ -281,7 +289,7 @@ pub fn map_params<C>(
         Param {
             name: "safety_buffer_m",
             doc: "extra clearance added to the rover radius when growing hazards",
-            unit: Unit::Metres,
+            unit: Unit::Clearance,
             field: buffer,
         },
     ]

@@ -57,7 +57,7 @@ param_group! {
     PaperParams in paper {
         /// Empirical safety buffer added to the rover radius when growing C-obstacles (m; paper
         /// 000 section 2).
-        safety_buffer: f64 = 0.1, "safety_buffer_m", Metres, Real,
+        safety_buffer: f64 = 0.1, "safety_buffer_m", Clearance, Real,
             "safety buffer added to the rover radius when growing C-obstacles";
         /// Fraction of the rover's belly clearance at which the step model behind the
         /// C-obstacles (on cell means) marks a hazard. At [`HAZARD_MARGIN`] (0.8), the usual
@@ -128,12 +128,12 @@ param_group! {
         /// Clearance kept between the body outline and a safety-layer hazard cell when a motion
         /// is checked before it is commanded (m): room for the sensed map's error (elevation
         /// RMSE about 0.02 m) and the drift between steps (0.12 m measured fewer arrivals).
-        body_margin: f64 = 0.08, "body_margin_m", Metres, Real,
+        body_margin: f64 = 0.08, "body_margin_m", Clearance, Real,
             "clearance kept between the body outline and a safety-layer hazard cell";
         /// Added to half the rover's width to grow the safety layer's own C-obstacles (m): the
         /// body margin plus the swing of the body's corners on arcs that start up to the turn
         /// threshold off the chord.
-        top_allowance: f64 = 0.15, "top_allowance_m", Metres, Real,
+        top_allowance: f64 = 0.15, "top_allowance_m", Clearance, Real,
             "added to half the rover's width to grow the safety layer's own C-obstacles";
         /// Fraction of the safety layer's step limit by which a hazard cell's own points must
         /// stand out from the ground around it to count (see `confirm_hazards`): sparsely sensed
