@@ -183,4 +183,49 @@ mod tests {
         assert!(lander_fix(&below, 0.0, &params).is_err());
         assert!(lander_fix(&s, f64::NAN, &params).is_err());
     }
+
+    #[test]
+    fn position_nees_of_a_rotated_covariance() {
+        // Sigma 2 along (1, 1)/sqrt 2, 0.5 across: an error of one sigma along either axis has
+        // NEES 1.
+        let (a, b) = (4.0, 0.25);
+        let fix = MatchResult {
+            pose: Pose2::new(0.0, 0.0, 0.0),
+            covariance: [[0.5 * (a + b), 0.5 * (a - b), 0.0], [0.5 * (a - b), 0.5 * (a + b), 0.0], [0.0; 3]],
+            log_likelihood: 0.0,
+            failure_probability: 0.0,
+            poses_evaluated: 0,
+        };
+        let s = 2f64.sqrt();
+        assert!((fix.position_nees(-s, -s).unwrap() - 1.0).abs() < 1e-12);
+        assert!((fix.position_nees(0.5 / s, -0.5 / s).unwrap() - 1.0).abs() < 1e-12);
+        let singular = MatchResult { covariance: [[0.0; 3]; 3], ..fix };
+        assert!(singular.position_nees(1.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn the_ekf_fuses_a_lander_fix_as_a_position_only_measurement() {
+        // An EKF 1 m off in x with a 1 m position sigma takes a lander fix at the truth with
+        // 0.1 m sigmas: its estimate moves to within a few centimetres of the fix (the Kalman
+        // gain 1 / (1 + 0.01)), and its heading is untouched.
+        let truth = Pose2::new(5.0, 1.0, 0.3);
+        let mut ekf = crate::Ekf::new(
+            &RoverConfig::default(),
+            rovernav_core::Pose3 { x: 6.0, y: 1.0, yaw: 0.3, ..Default::default() },
+        );
+        ekf.reset_position(6.0, 1.0, 1.0);
+        let fix = MatchResult {
+            pose: truth,
+            covariance: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0; 3]],
+            log_likelihood: 0.0,
+            failure_probability: 0.0,
+            poses_evaluated: 0,
+        };
+        assert!(ekf.fuse_fix(&fix));
+        use rovernav_core::Localizer;
+        let e = ekf.estimate().pose;
+        let expected = 6.0 - 1.0 / 1.01;
+        assert!((e.x - expected).abs() < 1e-6 && (e.y - 1.0).abs() < 1e-9, "{e:?}");
+        assert!((e.yaw - 0.3).abs() < 1e-9);
+    }
 }

@@ -21,8 +21,9 @@
 //! - Heights are layered at a quarter of the grid scale (`vertical_exaggeration` 4): the relief
 //!   an orbital map keeps is gentle, and at the grid scale most of it would fall in one layer.
 
-use rovernav_core::{Grid2, GridGeometry};
+use rovernav_core::{Grid2, GridGeometry, Pose3};
 
+use crate::matching::elevation::bin_points;
 use crate::matching::{MatchError, MatchResult, MlMatcher, MlParams, SearchWindow};
 
 /// Settings of the orbital match.
@@ -107,6 +108,23 @@ pub fn orbital_reference(orbital: &Grid2<f32>, geometry: GridGeometry) -> Grid2<
         }
     }
     Grid2 { geometry, data }
+}
+
+/// The orbital map as the matcher sees it around (x, y): a square of half-side `reach` (m) of
+/// `cell`-sized cells centred there.
+pub fn reference_around(orbital: &Grid2<f32>, x: f64, y: f64, reach: f64, cell: f64) -> Grid2<f32> {
+    let n = (2.0 * reach / cell).round() as usize;
+    let geometry =
+        GridGeometry { cols: n, rows: n, resolution: cell, origin_x: x - reach, origin_y: y - reach };
+    orbital_reference(orbital, geometry)
+}
+
+/// The rover-frame map of a panorama: body-frame `points` levelled with the rover's `roll` and
+/// `pitch` (rad) and binned into `cell`-sized cells out to `range` (m) on every side.
+pub fn panorama_map(points: &[[f32; 3]], roll: f64, pitch: f64, range: f64, cell: f64) -> Grid2<f32> {
+    let n = (2.0 * range / cell).round() as usize;
+    let geometry = GridGeometry { cols: n, rows: n, resolution: cell, origin_x: -range, origin_y: -range };
+    bin_points(points, &Pose3 { roll, pitch, ..Default::default() }, geometry)
 }
 
 /// Matches the rover-frame local elevation map `local` against the world-frame orbital map

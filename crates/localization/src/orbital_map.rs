@@ -12,12 +12,9 @@
 //! Unlike `ekf-ml`, whose map is its own and whose windows cover only the drift since that map
 //! was made, the orbital map is absolute: the window follows the filter's whole uncertainty.
 
-use rovernav_core::{
-    Grid2, GridGeometry, Localizer, LocalizerStats, Pose3, PoseEstimate, RoverConfig, SensorFrame,
-};
+use rovernav_core::{Grid2, Localizer, LocalizerStats, Pose3, PoseEstimate, RoverConfig, SensorFrame};
 
-use crate::matching::elevation::bin_points;
-use crate::orbital::{OrbitalParams, match_orbital, orbital_reference};
+use crate::orbital::{OrbitalParams, match_orbital, panorama_map, reference_around};
 use crate::{Ekf, SearchWindow};
 
 /// Settings of the `orbital-map` localiser.
@@ -84,27 +81,15 @@ impl OrbitalMapLocalizer {
     fn try_fix(&mut self, frame: &SensorFrame) {
         let p = self.params;
         let estimate = self.ekf.estimate();
-        let level = Pose3 { roll: estimate.pose.roll, pitch: estimate.pose.pitch, ..Default::default() };
-        let n = (2.0 * p.range_m / p.cell).round() as usize;
-        let local_geometry =
-            GridGeometry { cols: n, rows: n, resolution: p.cell, origin_x: -p.range_m, origin_y: -p.range_m };
         let points: Vec<[f32; 3]> = frame.clouds.iter().flat_map(|c| c.points.iter().copied()).collect();
-        let local = bin_points(&points, &level, local_geometry);
+        let local = panorama_map(&points, estimate.pose.roll, estimate.pose.pitch, p.range_m, p.cell);
         let mut window = SearchWindow::from_estimate(&estimate, p.window_sigmas, p.min_window_m, p.half_yaw);
         window.half_x = window.half_x.min(p.max_window_m);
         window.half_y = window.half_y.min(p.max_window_m);
         window.half_yaw = window.half_yaw.min(p.half_yaw);
         let reach = p.range_m + window.half_x.max(window.half_y) + 6.0;
-        let m = (2.0 * reach / p.cell).round() as usize;
         let c = window.center;
-        let geometry = GridGeometry {
-            cols: m,
-            rows: m,
-            resolution: p.cell,
-            origin_x: c.x - reach,
-            origin_y: c.y - reach,
-        };
-        let reference = orbital_reference(&self.orbital, geometry);
+        let reference = reference_around(&self.orbital, c.x, c.y, reach, p.cell);
         self.stats.matches_attempted += 1;
         let Ok(fix) = match_orbital(&local, &reference, &window, &p.orbital) else {
             self.stats.fixes_rejected += 1;

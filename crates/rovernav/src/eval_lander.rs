@@ -241,15 +241,9 @@ fn trial(seed: u64, rover: &RoverConfig, rig: &Rig, args: &EvalLanderArgs) -> an
         range_m,
         downrange_pct: Some(100.0 * (ex * u.0 + ey * u.1) / range_m),
         crossrange_pct: Some(100.0 * (-ex * u.1 + ey * u.0) / range_m),
-        nees: nees_2d(&fix.covariance, ex, ey),
+        nees: fix.position_nees(truth.x, truth.y),
         failure: None,
     })
-}
-
-/// e^T C^-1 e for the position block of a fix's covariance (`None` if it is singular).
-fn nees_2d(c: &[[f64; 3]; 3], ex: f64, ey: f64) -> Option<f64> {
-    let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
-    (det > 0.0).then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
 }
 
 /// A standard normal draw for `seed` (heading noise), independent of the scene's draws.
@@ -309,16 +303,5 @@ mod tests {
         assert!((m - 2.5).abs() < 1e-12 && (s - (5.0f64 / 3.0).sqrt()).abs() < 1e-12);
         assert!(mean_std(&[]).0.is_nan());
         assert_eq!(mean_std(&[3.0]), (3.0, 0.0));
-    }
-
-    #[test]
-    fn nees_of_a_rotated_covariance() {
-        // sigma 2 along (1, 1)/sqrt 2, 0.5 across: an error of 2 along the axis has NEES 1.
-        let (a, b) = (4.0, 0.25);
-        let c = [[0.5 * (a + b), 0.5 * (a - b), 0.0], [0.5 * (a - b), 0.5 * (a + b), 0.0], [0.0; 3]];
-        let s = 2f64.sqrt();
-        assert!((nees_2d(&c, s, s).unwrap() - 1.0).abs() < 1e-12);
-        assert!((nees_2d(&c, -0.5 / s, 0.5 / s).unwrap() - 1.0).abs() < 1e-12);
-        assert!(nees_2d(&[[0.0; 3]; 3], 1.0, 0.0).is_none());
     }
 }

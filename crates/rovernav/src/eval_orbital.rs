@@ -20,10 +20,9 @@ use anyhow::Context;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rovernav_core::{Grid2, GridGeometry, NavCommand, Pose2, Pose3, RoverConfig, SenseRequest};
+use rovernav_core::{Grid2, NavCommand, Pose2, Pose3, RoverConfig, SenseRequest};
 use rovernav_localization::SearchWindow;
-use rovernav_localization::matching::elevation::bin_points;
-use rovernav_localization::orbital::{OrbitalParams, degrade, match_orbital, orbital_reference};
+use rovernav_localization::orbital::{OrbitalParams, degrade, match_orbital, panorama_map, reference_around};
 use rovernav_sim::{SensorModel, Simulator};
 use rovernav_terrain::procedural::{RockyRegionParams, rocky_region};
 use rovernav_terrain::{Dem, LocalRect, RockFieldParams};
@@ -239,28 +238,10 @@ fn position(
         (0..8).map(|k| SenseRequest::MastFine { pan: f64::from(k) * 0.25 * std::f64::consts::PI }).collect();
     let frame = sim.execute(&NavCommand::Sense(pans));
     let points: Vec<[f32; 3]> = frame.clouds.into_iter().flat_map(|c| c.points).collect();
-    // The local map, levelled with the rover's roll and pitch (its inclinometer).
-    let cells = (2.0 * PANORAMA_RANGE_M / args.cell).round() as usize;
-    let local_geometry = GridGeometry {
-        cols: cells,
-        rows: cells,
-        resolution: args.cell,
-        origin_x: -PANORAMA_RANGE_M,
-        origin_y: -PANORAMA_RANGE_M,
-    };
-    let level = Pose3 { roll: truth.roll, pitch: truth.pitch, ..Default::default() };
-    let local = bin_points(&points, &level, local_geometry);
-    // The orbital map around the dead-reckoned position, at the matching cell size.
-    let reach = PANORAMA_RANGE_M + WINDOW_M + 6.0;
-    let n = (2.0 * reach / args.cell).round() as usize;
-    let reference_geometry = GridGeometry {
-        cols: n,
-        rows: n,
-        resolution: args.cell,
-        origin_x: dr.x - reach,
-        origin_y: dr.y - reach,
-    };
-    let reference = orbital_reference(orbital, reference_geometry);
+    // The local map, levelled with the rover's roll and pitch (its inclinometer), and the
+    // orbital map around the dead-reckoned position, at the matching cell size.
+    let local = panorama_map(&points, truth.roll, truth.pitch, PANORAMA_RANGE_M, args.cell);
+    let reference = reference_around(orbital, dr.x, dr.y, PANORAMA_RANGE_M + WINDOW_M + 6.0, args.cell);
     let window =
         SearchWindow { center: dr, half_x: WINDOW_M, half_y: WINDOW_M, half_yaw: WINDOW_DEG.to_radians() };
     let base = OrbitalPosition {
@@ -283,13 +264,7 @@ fn position(
             heading_error_deg: Some(rovernav_core::wrap_angle(m.pose.yaw - truth.yaw).to_degrees()),
             failure_probability: Some(m.failure_probability),
             sigma_m: Some([m.covariance[0][0].sqrt(), m.covariance[1][1].sqrt()]),
-            nees: {
-                let c = &m.covariance;
-                let (ex, ey) = (m.pose.x - truth.x, m.pose.y - truth.y);
-                let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
-                (det > 0.0)
-                    .then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
-            },
+            nees: m.position_nees(truth.x, truth.y),
             ..base
         },
         Err(e) => OrbitalPosition { failure: Some(e.to_string()), ..base },

@@ -39,6 +39,18 @@ pub struct MatchResult {
     pub poses_evaluated: u64,
 }
 
+impl MatchResult {
+    /// Normalised estimation error squared of the matched position against a true position
+    /// (x, y): e^T C^-1 e with the covariance's position block (2 on average for an honest
+    /// covariance); `None` when that block is singular.
+    pub fn position_nees(&self, x: f64, y: f64) -> Option<f64> {
+        let c = &self.covariance;
+        let (ex, ey) = (self.pose.x - x, self.pose.y - y);
+        let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
+        (det > 0.0).then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
+    }
+}
+
 /// The region of pose space to search, around the dead-reckoned pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SearchWindow {
