@@ -547,7 +547,8 @@ impl Pds3Image {
         let line_bytes = prefix + line_samples * bytes_per_sample + suffix;
         // The samples (f32) and raw bytes this label asks for, against the memory ceiling, before
         // reading; `read_range` then checks the bytes against the file's length.
-        for (dims, size) in [([lines as u64, line_samples as u64], 4), ([lines as u64, line_bytes as u64], 1)] {
+        for (dims, size) in [([lines as u64, line_samples as u64], 4), ([lines as u64, line_bytes as u64], 1)]
+        {
             rovernav_core::limits::checked_elements(&dims, size, None)
                 .map_err(|why| LoadError::invalid(f, "IMAGE.LINES/LINE_SAMPLES", why))?;
         }
