@@ -206,7 +206,10 @@ impl Navigator for RoverBug {
         }
         self.goal_tolerance = input.goal.tolerance;
         if x.dist(goal) <= input.goal.tolerance {
-            return NavCommand::Finish(Outcome::Reached, format!("estimate within {:.2} m of the goal", x.dist(goal)));
+            return NavCommand::Finish(
+                Outcome::Reached,
+                format!("estimate within {:.2} m of the goal", x.dist(goal)),
+            );
         }
         if let Some(why) = &input.frame.motion_stopped {
             self.waypoints.clear();
