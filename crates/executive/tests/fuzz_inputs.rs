@@ -15,12 +15,32 @@ mod mutate;
 
 use mutate::input;
 
+thread_local! {
+    /// The case being run, printed by the panic hook.
+    static CURRENT: std::cell::RefCell<String> = const { std::cell::RefCell::new(String::new()) };
+}
+
+/// Prints `text` with any panic of this case, at once: a case that aborts (or that proptest
+/// shrinks for minutes) still shows its input.
+fn show_on_panic(text: &str) {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let default = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            CURRENT.with(|c| eprintln!("fuzz input that panicked:\n{}\n---", c.borrow()));
+            default(info);
+        }));
+    });
+    CURRENT.with(|c| *c.borrow_mut() = text.to_string());
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn fuzz_mission_parser_world_and_graph((path, bytes) in input("mission")) {
         let text = String::from_utf8_lossy(&bytes);
+        show_on_panic(&text);
         match Mission::from_toml(&text, "fuzz.toml") {
             Err(e) => prop_assert!(!e.to_string().contains('\n'), "{}: {e}", path.display()),
             Ok(mission) => {
