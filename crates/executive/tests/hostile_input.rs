@@ -128,6 +128,22 @@ fn navigator_lengths_and_counts_are_bounded() {
     }
 }
 
+#[test]
+fn dem_resolution_is_bounded() {
+    // Found by the mission fuzz target: 4294967296 m overflowed a grid allocation (panic).
+    let gale = include_str!("../../../missions/gale-traverse.toml");
+    for res in ["4294967296", "0.0001", "nan"] {
+        let text = gale.replace("resolution_m = 0.1", &format!("resolution_m = {res}"));
+        assert_ne!(text, gale);
+        let e = refused(&text);
+        assert!(e.contains("`terrain.resolution_m`") && e.contains("line "), "{res}: {e}");
+    }
+    let text = gale.replace("8142640.0, -276640.0]", "8152640.0, -266640.0]");
+    assert_ne!(text, gale);
+    let e = refused(&text);
+    assert!(e.contains("over 1e8 cells"), "{e}");
+}
+
 #[cfg(unix)]
 #[test]
 fn dem_path_that_is_a_fifo_is_refused_without_blocking() {

@@ -88,8 +88,18 @@ impl TerrainSpec {
                 }
             }
             TerrainSpec::Dem { resolution_m, rock_abundance, region, .. } => {
-                if !positive(*resolution_m) {
-                    return Err(("terrain.resolution_m", "must be positive"));
+                // Bounded both ways: the mission fuzz target found 4294967296 (capacity overflow
+                // panic), and a tiny one would resample the DEM into a grid no memory holds.
+                if !(0.01..=100.0).contains(resolution_m) {
+                    return Err(("terrain.resolution_m", "must be in [0.01, 100] m"));
+                }
+                if let Some([e0, n0, e1, n1]) = region
+                    && ((e1 - e0) / resolution_m) * ((n1 - n0) / resolution_m) > 1.0e8
+                {
+                    return Err((
+                        "terrain.resolution_m",
+                        "region too large at this resolution (over 1e8 cells)",
+                    ));
                 }
                 if !(0.0..=0.5).contains(rock_abundance) {
                     return Err(("terrain.rock_abundance", "must be in [0, 0.5]"));
