@@ -2,6 +2,16 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The report's message: the navigator's words, and for a reached goal the true error the
+/// simulator measured beside the estimate's (navigators judge arrival on their estimate).
+pub fn run_message(outcome: rovernav_core::Outcome, navigator_message: &str, goal_error_m: f64) -> String {
+    if outcome == rovernav_core::Outcome::Reached {
+        format!("{navigator_message}; true error {goal_error_m:.2} m")
+    } else {
+        navigator_message.to_string()
+    }
+}
+
 /// The outcome and figures of one traverse.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct Report {

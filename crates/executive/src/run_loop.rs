@@ -31,7 +31,7 @@ use crate::runtime::Runtime;
 use crate::scoring::{Judgement, Scorer};
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, InProcessTransport, Subscriber, TapId};
-use rovernav_core::{Navigator, Outcome, Point2, Pose3};
+use rovernav_core::{Navigator, Point2, Pose3};
 use rovernav_sim::Simulator;
 use std::time::Instant;
 
@@ -210,12 +210,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         localization_s: runtime.busy_s("pose-estimator"),
         platform_s: runtime.busy_s("platform"),
     };
-    // The navigator judges arrival on its estimate; the report adds where the rover truly is.
-    let message = if outcome == Outcome::Reached {
-        format!("{message}; true error {:.2} m", scoring.goal_error_m)
-    } else {
-        message
-    };
+    let message = crate::report::run_message(outcome, &message, scoring.goal_error_m);
     let report = Report {
         outcome: outcome.as_str().into(),
         message,

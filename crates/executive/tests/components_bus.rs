@@ -90,15 +90,16 @@ fn direct_loop(world: &World, s: &RunSettings) -> Reference {
     };
     let t = sim.truth();
     let e = localizer.estimate().pose;
+    let goal_error_m = Point2::new(t.x, t.y).dist(world.goal.position);
     Reference {
         outcome: outcome.as_str().into(),
-        message,
+        message: rovernav_executive::report::run_message(outcome, &message, goal_error_m),
         cycles,
         sim_time_s: sim.time(),
         distance_driven_m: sim.distance_driven(),
         hazard_contacts: sim.hazard_contacts(),
         sensing_actions: sim.sensing_actions(),
-        goal_error_m: Point2::new(t.x, t.y).dist(world.goal.position),
+        goal_error_m,
         localization_error_m: (t.x - e.x).hypot(t.y - e.y),
         truth,
         estimate,
