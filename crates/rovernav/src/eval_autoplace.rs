@@ -123,13 +123,7 @@ pub struct AutoplaceEvaluation {
 
 /// Runs the evaluation and prints it.
 pub fn run(args: EvalAutoplaceArgs) -> anyhow::Result<()> {
-    let evaluation = evaluate(&args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&evaluation)?);
-    } else {
-        print_table(&evaluation);
-    }
-    Ok(())
+    crate::output::print_evaluation(args.json, &evaluate(&args)?, print_table)
 }
 
 /// Runs the trials (in parallel) and pools them.

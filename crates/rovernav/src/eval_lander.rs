@@ -127,13 +127,7 @@ pub fn run(args: EvalLanderArgs) -> anyhow::Result<()> {
         "--image-size: {} is outside 64..2048",
         args.image_size
     );
-    let evaluation = evaluate(&args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&evaluation)?);
-    } else {
-        print_table(&evaluation);
-    }
-    Ok(())
+    crate::output::print_evaluation(args.json, &evaluate(&args)?, print_table)
 }
 
 /// The lander rig of the evaluation: the mast 1.8 m above the lander's foot, a 40 deg field of

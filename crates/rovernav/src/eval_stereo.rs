@@ -106,13 +106,7 @@ struct PixelError {
 /// Runs the evaluation and prints the figures.
 pub fn run(args: EvalStereoArgs) -> anyhow::Result<()> {
     let seeds: Vec<u64> = parse_seed_range(&args.seeds)?.collect();
-    let evaluation = evaluate(&seeds)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&evaluation)?);
-    } else {
-        print_table(&evaluation);
-    }
-    Ok(())
+    crate::output::print_evaluation(args.json, &evaluate(&seeds)?, print_table)
 }
 
 /// Images every seed's start position and pools the pixel errors.

@@ -133,13 +133,7 @@ pub struct VttEvaluation {
 
 /// Runs the evaluation and prints the figures.
 pub fn run(args: EvalVttArgs) -> anyhow::Result<()> {
-    let evaluation = evaluate(&args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&evaluation)?);
-    } else {
-        print_table(&evaluation);
-    }
-    Ok(())
+    crate::output::print_evaluation(args.json, &evaluate(&args)?, print_table)
 }
 
 /// The trial set-up chosen on a yard.

@@ -78,3 +78,17 @@ impl RunLog {
         Ok(())
     }
 }
+
+/// Prints an evaluation's figures: pretty JSON with `--json`, else the evaluation's table.
+pub fn print_evaluation<T: serde::Serialize>(
+    json: bool,
+    evaluation: &T,
+    table: fn(&T),
+) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(evaluation)?);
+    } else {
+        table(evaluation);
+    }
+    Ok(())
+}
