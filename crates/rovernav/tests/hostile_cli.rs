@@ -4,9 +4,8 @@
 
 mod common;
 
-use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("rovernav-hostile-{}-{name}", std::process::id()));
@@ -19,18 +18,8 @@ fn temp_dir(name: &str) -> PathBuf {
 /// the report's outcome and standard output.
 fn interactive(name: &str, input: &[u8]) -> (String, String) {
     let dir = temp_dir(name);
-    let mission = dir.join("mission.toml");
-    std::fs::write(&mission, common::SMALL_YARD).unwrap();
     let out = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
-        .args(["run", mission.to_str().unwrap(), "--interactive", "--out", out.to_str().unwrap()])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("binary runs");
-    child.stdin.take().unwrap().write_all(input).unwrap();
-    let result = child.wait_with_output().unwrap();
+    let result = common::run_interactive(&dir, input);
     let stdout = String::from_utf8_lossy(&result.stdout).to_string();
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(result.status.success() && !stderr.contains("panicked"), "stdout: {stdout}\nstderr: {stderr}");

@@ -3,25 +3,12 @@
 
 mod common;
 
-use std::io::Write;
-use std::process::{Command, Stdio};
-
 #[test]
 fn piped_commands_change_the_goal_answer_status_and_name_the_bad_token() {
     let dir = std::env::temp_dir().join(format!("rovernav-interactive-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let mission = dir.join("mission.toml");
-    std::fs::write(&mission, common::SMALL_YARD).unwrap();
     let out = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rovernav"))
-        .args(["run", mission.to_str().unwrap(), "--interactive", "--out", out.to_str().unwrap()])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("binary runs");
-    child.stdin.take().unwrap().write_all(b"goto 3.5 9\nstatus\nwarp 9\n").unwrap();
-    let result = child.wait_with_output().unwrap();
+    let result = common::run_interactive(&dir, b"goto 3.5 9\nstatus\nwarp 9\n");
     let stdout = String::from_utf8_lossy(&result.stdout);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(result.status.success(), "stdout: {stdout}\nstderr: {stderr}");
