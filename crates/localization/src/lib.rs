@@ -12,6 +12,7 @@
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
+//! - [`benchmark`]: the matcher workloads of the benches and `rovernav bench report`.
 //!
 //! Localisers are chosen by name through the registry (`rovernav_navigation::registry`, which
 //! lists them with their `[localizer_params]`; [`localizer_by_name`] builds the built-in ones
@@ -20,6 +21,7 @@
 //! elevation map, match it with [`MlMatcher::match_map`] in a [`SearchWindow`] from the
 //! estimate, and fuse the result with [`Ekf::fuse_fix`].
 
+pub mod benchmark;
 pub mod dead_reckoning;
 pub mod ekf;
 pub mod ekf_ml;

@@ -621,6 +621,8 @@ pub struct MatchDetails {
     /// Single poses the main search bounded or scored (`poses_evaluated` counts their lookups
     /// with those of the box bounds, in poses' worth).
     pub poses_tested: u64,
+    /// Boxes bounded and poses scored by the main search.
+    pub boxes: u64,
     /// Evaluations spent on the failure-probability search.
     pub failure_search_evaluations: u64,
     /// Number of local cells scored per pose.
@@ -1640,6 +1642,7 @@ pub fn run_match<S: DistanceScore>(
         lattice,
         runner_up,
         poses_tested: main.poses_tested,
+        boxes: main.boxes,
         failure_search_evaluations,
         local_cells: scorer.cells.len(),
         peak_fit_ok,
