@@ -288,7 +288,7 @@ pub fn merge_dirs(
     let mut all = Vec::new();
     for ((_, rows), dir) in parts.into_iter().zip(dirs) {
         for r in &rows {
-            if r.success {
+            if !r.failed() {
                 continue;
             }
             let mut names = vec![r.picture_name()];

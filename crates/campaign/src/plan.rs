@@ -51,6 +51,9 @@ pub struct TrialInfo {
     pub relief_m: Option<f64>,
     /// Yard side (m), procedural yards only.
     pub size_m: Option<f64>,
+    /// The fault drill's kind (`[[faults]]`), if the trial injects one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fault: Option<String>,
 }
 
 /// One run: a trial driven by one navigator. `index` is the position in the flattened
@@ -78,6 +81,28 @@ pub struct Plan {
     pub skipped: Vec<String>,
     /// The mission of each trial (its navigator is set per job).
     missions: Vec<(Mission, String)>,
+}
+
+/// Gives trial `k` its fault drill (entry k mod n of `[[faults]]`), striking before the command
+/// drawn from `fault_cycle` unless the entry says when; returns its label (`silent_sensor:mast`). Draws nothing without
+/// drills, so campaigns without them keep their yards.
+fn assign_fault(
+    spec: &CampaignSpec,
+    k: usize,
+    rng: &mut impl rand::Rng,
+    mission: &mut Mission,
+) -> Option<String> {
+    if spec.faults.is_empty() {
+        return None;
+    }
+    let mut fault = spec.faults[k % spec.faults.len()].clone();
+    let cycle = spec.fault_cycle.sample(rng).round().max(0.0) as u64;
+    if fault.at_cycle.is_none() && fault.at_time_s.is_none() {
+        fault.at_cycle = Some(cycle);
+    }
+    let label = fault.label();
+    mission.faults.push(fault);
+    Some(label)
 }
 
 /// Stream of the procedural trials' draws; DEM trials use streams with the top bit set.
@@ -130,6 +155,7 @@ impl Plan {
                 slope_deg: Some(slope_deg),
                 relief_m: Some(relief_m),
                 size_m: Some(y.size_m),
+                fault: assign_fault(&spec, k, &mut rng, &mut mission),
             });
             missions.push((mission, format!("campaign `{}` trial {k}", spec.name)));
         }
@@ -172,6 +198,7 @@ impl Plan {
                     slope_deg: None,
                     relief_m: None,
                     size_m: None,
+                    fault: assign_fault(&spec, k, &mut rng, &mut mission),
                 });
                 missions.push((mission, format!("{} (campaign trial {k})", path.display())));
             }
@@ -234,8 +261,13 @@ impl Plan {
              [terrain]\nkind = \"procedural\"\nsize_m = {size_m:?}\nresolution_m = {resolution_m:?}\n\
              rock_abundance = {rock_abundance:?}\nrelief_m = {relief_m:?}\nslope_deg = {slope_deg:?}\n{craters}\n\
              [start]\nx = {sx:?}\ny = {sy:?}\nyaw_deg = {yaw:?}\n\n\
-             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n{sensors}{params}",
+             [goal]\nx = {gx:?}\ny = {gy:?}\ntolerance_m = {tol:?}\n{sensors}{params}{faults}",
             sensors = m.sensors.toml_table(),
+            faults = m
+                .faults
+                .iter()
+                .map(|f| format!("\n[[faults]]\n{}", toml::to_string(f).unwrap_or_default()))
+                .collect::<String>(),
             campaign = self.spec.name,
             cseed = self.spec.seed,
             name = m.name,

@@ -60,11 +60,29 @@ pub struct Row {
     /// at wheel 0`), if there was one: which limit the run broke and by how much.
     #[serde(default)]
     pub first_contact: Option<String>,
+    /// The fault drill, if the trial injected one: kind and what it names (`silent_sensor:mast`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fault: Option<String>,
+    /// Simulated time the fault struck (s); null when the run ended before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fault_time_s: Option<f64>,
+    /// Fault protection acted at or after the fault.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fault_detected: Option<bool>,
+    /// Simulated time from the fault to fault protection's stop (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_to_detect_s: Option<f64>,
+    /// Fault protection stopped the rover (`help_requested`) after the fault.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_safely: Option<bool>,
+    /// Hazard contacts of the true rover after the fault.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contacts_after_fault: Option<u32>,
 }
 
 /// CSV column names, in the order of [`Row::csv_fields`] (the JSON keys, with
 /// `compute_per_cycle` flattened).
-pub const CSV_HEADER: [&str; 26] = [
+pub const CSV_HEADER: [&str; 32] = [
     "trial",
     "terrain_kind",
     "terrain",
@@ -91,6 +109,12 @@ pub const CSV_HEADER: [&str; 26] = [
     "wall_time_s",
     "message",
     "first_contact",
+    "fault",
+    "fault_time_s",
+    "fault_detected",
+    "time_to_detect_s",
+    "stopped_safely",
+    "contacts_after_fault",
 ];
 
 impl Row {
@@ -126,6 +150,37 @@ impl Row {
             wall_time_s: report.wall_time_s,
             message: report.message.clone(),
             first_contact: report.hazard_events.first().map(|e| e.cause.clone()),
+            fault: None,
+            fault_time_s: None,
+            fault_detected: None,
+            time_to_detect_s: None,
+            stopped_safely: None,
+            contacts_after_fault: None,
+        }
+        .with_fault(trial.fault.as_deref(), report)
+    }
+
+    /// The fault drill's figures: the first injected fault against fault protection's stop.
+    fn with_fault(mut self, kind: Option<&str>, report: &Report) -> Self {
+        let Some(kind) = kind else { return self };
+        self.fault = Some(kind.to_string());
+        let Some(injected) = report.injected_faults.first() else { return self };
+        self.fault_time_s = Some(injected.time_s);
+        let stop = report.fault.as_ref().filter(|f| f.time_s >= injected.time_s - 1e-9);
+        self.fault_detected = Some(stop.is_some());
+        self.time_to_detect_s = stop.map(|f| f.time_s - injected.time_s);
+        self.stopped_safely = Some(stop.is_some() && report.outcome == "help_requested");
+        self.contacts_after_fault = Some(injected.hazard_contacts_after);
+        self
+    }
+
+    /// Whether the run failed: a fault drill fails when the fault struck and the rover was not
+    /// stopped safely or met a hazard after it; any other run when it did not succeed.
+    pub fn failed(&self) -> bool {
+        match (&self.fault, self.stopped_safely) {
+            (Some(_), Some(stopped)) => !stopped || self.contacts_after_fault.unwrap_or(0) > 0,
+            (Some(_), None) => false,
+            (None, _) => !self.success,
         }
     }
 
@@ -140,6 +195,7 @@ impl Row {
             slope_deg: self.slope_deg,
             relief_m: self.relief_m,
             size_m: self.size_m,
+            fault: self.fault.clone(),
         }
     }
 
@@ -184,6 +240,12 @@ impl Row {
             self.wall_time_s.to_string(),
             csv_quote(&self.message),
             self.first_contact.as_deref().map_or(String::new(), csv_quote),
+            self.fault.as_deref().map_or(String::new(), csv_quote),
+            opt(self.fault_time_s),
+            self.fault_detected.map_or(String::new(), |v| v.to_string()),
+            opt(self.time_to_detect_s),
+            self.stopped_safely.map_or(String::new(), |v| v.to_string()),
+            self.contacts_after_fault.map_or(String::new(), |v| v.to_string()),
         ]
     }
 }
@@ -264,6 +326,7 @@ pub(crate) mod tests {
             slope_deg: Some(1.5),
             relief_m: Some(0.25),
             size_m: Some(30.0),
+            fault: None,
         };
         Row::new(&info, nav, &report)
     }
@@ -296,7 +359,14 @@ pub(crate) mod tests {
 
     #[test]
     fn csv_columns_are_the_json_keys() {
-        let r = row(1, "gestalt+field-dstar", "reached", 0, 11.0);
+        // A fault drill's row, whose fault columns are in the JSON (other rows leave them out).
+        let mut r = row(1, "gestalt+field-dstar", "reached", 0, 11.0);
+        r.fault = Some("compass_nan".into());
+        r.fault_time_s = Some(20.0);
+        r.fault_detected = Some(true);
+        r.time_to_detect_s = Some(0.1);
+        r.stopped_safely = Some(true);
+        r.contacts_after_fault = Some(0);
         let json = serde_json::to_value(&r).unwrap();
         let mut keys = Vec::new();
         for (k, v) in json.as_object().unwrap() {

@@ -77,7 +77,7 @@ fn run_one(plan: &Plan, job: &Job, failures_dir: Option<&Path>) -> Result<Row, C
             })?
             .map_err(|e| run_error(e.to_string()))?;
     let row = Row::new(&plan.trials[job.trial], &mission.navigator, &output.report);
-    if !row.success
+    if row.failed()
         && let Some(dir) = failures_dir
     {
         write_atomic(&dir.join(row.picture_name()), &traverse_png(&output)?)?;

@@ -63,6 +63,14 @@ pub struct CampaignSpec {
     /// Missions on real elevation models added after the procedural yards.
     #[serde(default)]
     pub dem: Vec<DemEntry>,
+    /// Fault drills (`[[faults]]`, as a mission's): trial k injects entry k mod n, so each
+    /// kind meets trials/n yards. An entry without `at_cycle` or `at_time_s` strikes before the
+    /// command drawn from `fault_cycle`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<rovernav_executive::mission::FaultSpec>,
+    /// The command before which a drill's fault strikes, drawn per trial.
+    #[serde(default = "default_fault_cycle")]
+    pub fault_cycle: Draw,
     /// Folder the campaign file was read from (DEM mission paths resolve against it first).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -192,6 +200,10 @@ fn navigator_names_or_choices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<
                 .map_err(serde::de::Error::custom),
         })
         .collect()
+}
+
+fn default_fault_cycle() -> Draw {
+    Draw::Range(RangeSpec { min: 3.0, max: 15.0 })
 }
 
 fn default_localizer() -> String {
@@ -365,6 +377,12 @@ impl CampaignSpec {
         }
         if self.max_cycles == 0 {
             return bad("max_cycles", "must be at least 1".into());
+        }
+        if let Err((field, why)) = rovernav_executive::mission::check_faults(&self.faults) {
+            return bad(&field, why.into());
+        }
+        if self.fault_cycle.extremes().iter().any(|c| !(c.is_finite() && (0.0..=1.0e6).contains(c))) {
+            return bad("fault_cycle", "must be command numbers in [0, 1000000]".into());
         }
         let y = &self.yard;
         if !positive(y.size_m) || y.size_m > 2000.0 {

@@ -89,6 +89,57 @@ pub struct Summary {
     pub failures: Vec<Failure>,
     /// DEM missions left out, one line each.
     pub skipped: Vec<String>,
+    /// Fault drills by kind (campaigns with `[[faults]]`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<FaultSummary>,
+}
+
+/// How fault protection met one kind of injected fault.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSummary {
+    /// The `[[faults]]` kind and what it names (`silent_sensor:mast`).
+    pub kind: String,
+    /// Runs planned with this fault.
+    pub runs: usize,
+    /// Runs where it struck (the others ended before its command).
+    pub injected: usize,
+    /// Of those, runs where fault protection acted after it.
+    pub detected: usize,
+    /// Of those, runs where the rover was stopped (`help_requested`).
+    pub stopped_safely: usize,
+    /// Hazard contacts after the fault, over all runs.
+    pub contacts_after_fault: u64,
+    /// Median simulated time from the fault to the stop (s).
+    pub time_to_detect_median_s: Option<f64>,
+    /// Longest time from the fault to the stop (s).
+    pub time_to_detect_max_s: Option<f64>,
+}
+
+fn fault_summaries(rows: &[&Row]) -> Vec<FaultSummary> {
+    let mut kinds: Vec<&str> = rows.iter().filter_map(|r| r.fault.as_deref()).collect();
+    kinds.sort_unstable();
+    kinds.dedup();
+    kinds
+        .into_iter()
+        .map(|kind| {
+            let mine: Vec<&&Row> = rows.iter().filter(|r| r.fault.as_deref() == Some(kind)).collect();
+            let times: Vec<f64> = mine.iter().filter_map(|r| r.time_to_detect_s).collect();
+            FaultSummary {
+                kind: kind.to_string(),
+                runs: mine.len(),
+                injected: mine.iter().filter(|r| r.fault_time_s.is_some()).count(),
+                detected: mine.iter().filter(|r| r.fault_detected == Some(true)).count(),
+                stopped_safely: mine.iter().filter(|r| r.stopped_safely == Some(true)).count(),
+                contacts_after_fault: mine
+                    .iter()
+                    .map(|r| u64::from(r.contacts_after_fault.unwrap_or(0)))
+                    .sum(),
+                time_to_detect_median_s: median(&times),
+                time_to_detect_max_s: times.iter().copied().reduce(f64::max),
+            }
+        })
+        .collect()
 }
 
 /// One navigator's figures.
@@ -223,7 +274,7 @@ pub fn summarise(meta: &CampaignMeta, rows: &[Row]) -> (Summary, MachineSummary)
     terrains.dedup();
     let failures = rows
         .iter()
-        .filter(|r| !r.success)
+        .filter(|r| r.failed())
         .map(|r| Failure {
             trial: r.trial,
             navigator: r.navigator.clone(),
@@ -252,6 +303,7 @@ pub fn summarise(meta: &CampaignMeta, rows: &[Row]) -> (Summary, MachineSummary)
         by_rock_abundance: rock_bins(&meta.navigators, &rows),
         failures,
         skipped: meta.skipped.clone(),
+        faults: fault_summaries(&rows),
     };
     let machine = MachineSummary {
         run_wall_time_s: rows.iter().map(|r| r.wall_time_s).sum(),
@@ -408,6 +460,35 @@ impl Summary {
         s
     }
 
+    /// The fault drills' table: for each kind, how often fault protection saw it and stopped
+    /// the rover, how fast, and the hazard contacts after it.
+    pub fn fault_table(&self) -> String {
+        let mut s = String::from(
+            "\n## Fault drills\n\nA drill fails when the fault struck and the rover was not stopped (`help_requested`) \
+             or met a hazard after it. Time to detect: simulated seconds from the fault to fault protection's stop.\n\n\
+             | fault | runs | struck | detected | stopped safely | contacts after | time to detect, median (s) | max (s) |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        let share = |k: usize, n: usize| {
+            if n == 0 { "-".to_string() } else { format!("{k} ({:.0} %)", 100.0 * k as f64 / n as f64) }
+        };
+        for f in &self.faults {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                f.kind,
+                f.runs,
+                f.injected,
+                share(f.detected, f.injected),
+                share(f.stopped_safely, f.injected),
+                f.contacts_after_fault,
+                num(f.time_to_detect_median_s, 1),
+                num(f.time_to_detect_max_s, 1)
+            );
+        }
+        s
+    }
+
     /// The deterministic part of `summary.md`.
     pub fn markdown(&self) -> String {
         let mut s = format!(
@@ -426,6 +507,9 @@ impl Summary {
         s.push_str(&self.rock_table());
         s.push_str("\nPlots: [success against rock abundance](plots/success_vs_rock_abundance.svg), ");
         s.push_str("[path ratio distribution](plots/path_ratio.svg).\n");
+        if !self.faults.is_empty() {
+            s.push_str(&self.fault_table());
+        }
         if !self.skipped.is_empty() {
             s.push_str("\n## Skipped\n\n");
             for line in &self.skipped {

@@ -30,6 +30,41 @@ pub enum FaultTrigger {
     Time(f64),
 }
 
+/// A component crash the run loop injects when its trigger comes (a software fault: the
+/// simulator has no part in it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScheduledCrash {
+    /// The component's name in the graph.
+    pub component: String,
+    /// When.
+    pub at: FaultTrigger,
+}
+
+/// A fault as it was injected: what, when, and the hazard contacts before it (truth, for
+/// scoring fault drills).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InjectedFault {
+    /// The mission file's kind name (`silent_sensor`, `component_crash`...).
+    pub kind: &'static str,
+    /// The crashed component, for a crash.
+    pub component: Option<String>,
+    /// Simulated time of the injection (s).
+    pub time_s: f64,
+    /// Hazard contacts before the injection.
+    pub hazard_contacts_before: u32,
+}
+
+/// The mission file's kind name of a simulator fault.
+pub fn fault_kind_name(fault: &Fault) -> &'static str {
+    match fault {
+        Fault::SilentSensor(_) => "silent_sensor",
+        Fault::NanRange(_) => "nan_range",
+        Fault::GyroBiasJump(_) => "gyro_bias_jump",
+        Fault::StalledWheel { .. } => "stalled_wheel",
+        Fault::CompassNaN => "compass_nan",
+    }
+}
+
 /// A fault the platform injects into the simulator when its trigger comes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScheduledFault {
@@ -58,7 +93,7 @@ pub struct Executed {
 pub struct SimPlatform {
     sim: Simulator,
     faults: Vec<ScheduledFault>,
-    injected: Vec<ScheduledFault>,
+    injected: Vec<InjectedFault>,
     commands: Option<Subscriber<MotionRequest>>,
     holds: Option<Subscriber<HoldMsg>>,
     seq: u64,
@@ -99,8 +134,13 @@ impl SimPlatform {
     }
 
     /// Faults injected so far.
-    pub fn injected_faults(&self) -> &[ScheduledFault] {
+    pub fn injected_faults(&self) -> &[InjectedFault] {
         &self.injected
+    }
+
+    /// Commands executed so far.
+    pub fn executed_count(&self) -> u64 {
+        self.executed_count
     }
 
     /// Injects the faults whose trigger has come, given the number of the next command.
@@ -113,8 +153,13 @@ impl SimPlatform {
             });
         for f in &due {
             self.sim.inject_fault(f.fault);
+            self.injected.push(InjectedFault {
+                kind: fault_kind_name(&f.fault),
+                component: None,
+                time_s: time,
+                hazard_contacts_before: self.sim.hazard_contacts(),
+            });
         }
-        self.injected.extend(due);
         self.faults = later;
     }
 

@@ -61,6 +61,9 @@ pub struct Report {
     /// The mission plan's tasks and how each ended.
     #[serde(default)]
     pub tasks: Vec<TaskReport>,
+    /// Faults injected by the mission's `[[faults]]` (drills), in order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub injected_faults: Vec<InjectedFaultReport>,
     /// The localiser's correction counters (null when unknown, e.g. recomputed from a cut-off log).
     #[serde(default)]
     pub localization_stats: Option<LocalizationStats>,
@@ -125,6 +128,21 @@ pub struct FaultReport {
     pub cycle: u64,
     /// Simulated time when fault protection acted (s).
     pub time_s: f64,
+}
+
+/// A fault the mission injected, and what the true rover did after it.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+pub struct InjectedFaultReport {
+    /// The mission file's kind (`silent_sensor`, `nan_range`, `stalled_wheel`, `compass_nan`,
+    /// `gyro_bias_jump`, `component_crash`).
+    pub kind: String,
+    /// The crashed component, for `component_crash`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub component: Option<String>,
+    /// Simulated time of the injection (s).
+    pub time_s: f64,
+    /// Hazard contacts of the true rover after the injection.
+    pub hazard_contacts_after: u32,
 }
 
 /// One task of the mission plan.

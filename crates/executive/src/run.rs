@@ -204,6 +204,8 @@ pub struct RunOptions {
     pub tasks: Vec<TaskSpec>,
     /// Faults the platform injects (`[[faults]]`).
     pub faults: Vec<ScheduledFault>,
+    /// Component crashes the loop injects (`[[faults]]` of kind `component_crash`).
+    pub crashes: Vec<crate::platform::ScheduledCrash>,
     /// Fault-protection thresholds.
     pub fault_protection: FaultProtectionConfig,
     /// Pose-estimator thresholds.
@@ -218,7 +220,12 @@ impl RunOptions {
     /// The tasks and faults of a mission file (targets mapped into the world's local frame).
     pub fn of(mission: &Mission, world: &World) -> Self {
         let to_local = crate::world::goal_frame_to_local(mission, world);
-        Self { tasks: mission.plan_tasks(&to_local), faults: mission.fault_schedule(), ..Self::default() }
+        Self {
+            tasks: mission.plan_tasks(&to_local),
+            faults: mission.fault_schedule(),
+            crashes: mission.crash_schedule(),
+            ..Self::default()
+        }
     }
 }
 

@@ -19,10 +19,10 @@ use crate::deliberative::{Deliberative, DeliberativeConfig};
 use crate::graph::{Parts, assemble as assemble_graph};
 use crate::messages::{ControlAction, topics};
 use crate::operator::OperatorLink;
-use crate::platform::SimPlatform;
+use crate::platform::{FaultTrigger, InjectedFault, ScheduledCrash, SimPlatform};
 use crate::reflexive::{NavigatorComponent, PoseEstimatorComponent};
 use crate::remote::{PlatformLink, RemotePlatform};
-use crate::report::{ComponentReport, FaultReport, Report, StageTimes, TaskReport};
+use crate::report::{ComponentReport, FaultReport, InjectedFaultReport, Report, StageTimes, TaskReport};
 use crate::run::{
     BusKind, CycleRecord, NoObserver, Progress, Run, RunError, RunObserver, RunOptions, RunOutput,
     RunSettings, Trace,
@@ -110,11 +110,14 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
     runtime.settle(runtime.clock())?;
 
     let mut cycles = 0u64;
+    let mut crashes = options.crashes.clone();
+    let mut crashed = Vec::new();
     let (outcome, message) = loop {
         let now = match scorer {
             Some(_) => sim_platform(&runtime).sim().time(),
             None => remote_platform(&mut runtime).sim_time(),
         };
+        inject_due_crashes(&mut runtime, &mut crashes, &mut crashed, cycles, now, scorer.is_some());
         if let Some(link) = operator.as_deref_mut() {
             for line in link.poll(cycles, deliberative.waiting()) {
                 runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
@@ -231,6 +234,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         hazard_events: scoring.hazard_events,
         compute_per_cycle: per_cycle(spent, cycles),
         localization_stats: Some(estimator(&runtime).localizer_stats().into()),
+        injected_faults: injected_faults(&runtime, crashed, scoring.hazard_contacts, remote),
         ..executive_outcome(&runtime, &deliberative)
     };
     observer.on_finish(&report, &trace);
@@ -342,6 +346,57 @@ fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
             .collect(),
         ..Report::default()
     }
+}
+
+/// Crashes the components whose drill is due before the next command (`cycles` executed so
+/// far, simulated time `now`), recording each injection.
+fn inject_due_crashes(
+    runtime: &mut Runtime,
+    pending: &mut Vec<ScheduledCrash>,
+    crashed: &mut Vec<InjectedFault>,
+    cycles: u64,
+    now: f64,
+    in_process: bool,
+) {
+    let (due, later): (Vec<_>, Vec<_>) = pending.drain(..).partition(|c| match c.at {
+        FaultTrigger::Cycle(n) => n <= cycles + 1,
+        FaultTrigger::Time(t) => t <= now,
+    });
+    *pending = later;
+    for c in due {
+        if runtime.inject_crash(&c.component) {
+            let before = if in_process { sim_platform(runtime).sim().hazard_contacts() } else { 0 };
+            crashed.push(InjectedFault {
+                kind: "component_crash",
+                component: Some(c.component),
+                time_s: now,
+                hazard_contacts_before: before,
+            });
+        }
+    }
+}
+
+/// The report's list of injected faults (platform faults and crashes, in time order) with the
+/// true hazard contacts after each.
+fn injected_faults(
+    runtime: &Runtime,
+    crashed: Vec<InjectedFault>,
+    contacts: u32,
+    remote: bool,
+) -> Vec<InjectedFaultReport> {
+    let mut all = crashed;
+    if !remote {
+        all.extend(sim_platform(runtime).injected_faults().iter().cloned());
+    }
+    all.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    all.into_iter()
+        .map(|f| InjectedFaultReport {
+            kind: f.kind.into(),
+            component: f.component,
+            time_s: f.time_s,
+            hazard_contacts_after: contacts.saturating_sub(f.hazard_contacts_before),
+        })
+        .collect()
 }
 
 /// Hands the deliberative layer's answers to the operator.

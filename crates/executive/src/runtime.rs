@@ -75,6 +75,8 @@ struct Slot {
     message: String,
     next_due: f64,
     busy: Duration,
+    /// A crash injected for a fault drill: the component's next run panics.
+    crash_pending: bool,
 }
 
 /// A component's name, state and the reason of its last change.
@@ -127,6 +129,7 @@ impl Runtime {
             message: "created".into(),
             next_due: f64::NEG_INFINITY,
             busy: Duration::ZERO,
+            crash_pending: false,
         });
         Ok(())
     }
@@ -233,14 +236,31 @@ impl Runtime {
         let slot = &mut self.slots[i];
         let mut ctx = Ctx { bus: &mut self.bus, time_s };
         let started = Instant::now();
-        let result = match slot.state {
-            JausState::Initialization => slot.component.initialize(&mut ctx).map(|()| true),
-            JausState::Ready => slot.component.step(&mut ctx).map(|()| false),
-            JausState::Standby | JausState::Emergency => {
-                slot.component.idle(&mut ctx, slot.state).map(|()| false)
+        let (state, crash) = (slot.state, std::mem::take(&mut slot.crash_pending));
+        let live = !matches!(state, JausState::Failure | JausState::Shutdown);
+        let component = &mut slot.component;
+        // A component that panics has crashed: it goes to Failure like one that reports a
+        // fault, and the rest of the rover carries on (fault protection then stops it safely).
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            if crash && live {
+                // `resume_unwind` unwinds without the panic hook's message: a drill, not a bug.
+                std::panic::resume_unwind(Box::new("injected crash"));
             }
-            JausState::Failure | JausState::Shutdown => Ok(false),
-        };
+            match state {
+                JausState::Initialization => component.initialize(&mut ctx).map(|()| true),
+                JausState::Ready => component.step(&mut ctx).map(|()| false),
+                JausState::Standby | JausState::Emergency => component.idle(&mut ctx, state).map(|()| false),
+                JausState::Failure | JausState::Shutdown => Ok(false),
+            }
+        }))
+        .unwrap_or_else(|panic| {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(ComponentFault(format!("crashed: {what}")))
+        });
         slot.busy += started.elapsed();
         match result {
             Ok(true) => self.set_state(i, JausState::Standby, "initialized".into(), time_s),
@@ -289,6 +309,18 @@ impl Runtime {
         };
         self.bus.publish(topics::SYSTEM_STATUS, status)?;
         Ok(())
+    }
+
+    /// Makes the named component crash (panic) the next time it runs, for fault drills; false
+    /// when no component has that name.
+    pub fn inject_crash(&mut self, name: &str) -> bool {
+        match self.slots.iter_mut().find(|s| s.component.name() == name) {
+            Some(slot) => {
+                slot.crash_pending = true;
+                true
+            }
+            None => false,
+        }
     }
 
     /// Every component's state, in stepping order.

@@ -72,6 +72,13 @@ impl RangeSensors {
         for f in frames(ctx, &self.frames)? {
             for cloud in &f.clouds {
                 let name = camera_name(cloud.camera);
+                let bad = cloud.points.iter().filter(|p| !p.iter().all(|v| v.is_finite())).count();
+                if bad > 0 {
+                    return Err(ComponentFault(format!(
+                        "sensor fault: {name} returned {bad} non-finite range points of {}",
+                        cloud.points.len()
+                    )));
+                }
                 let run = self.empty_in_a_row.entry(name).or_default();
                 if !cloud.points.is_empty() {
                     run.clear();
@@ -118,10 +125,24 @@ impl Component for RangeSensors {
     }
 }
 
-/// Inertial sensors (gyro, inclinometer, compass): a non-finite reading is a fault.
+/// Largest gyro rate the rover may read while its wheels are still (rad/s): 0.05 deg/s, that
+/// is 180 deg/h, 18 times the gyro's bias stability (10 deg/h, 1 sigma) plus six times a sample's
+/// noise (4 deg/h/sqrt(Hz) at 10 Hz: 13 deg/h). Planetary rovers hold still between commands
+/// (stop and go), so every command ends with samples at rest.
+pub const GYRO_REST_LIMIT: f64 = 0.05 * std::f64::consts::PI / 180.0;
+/// Consecutive at-rest samples beyond [`GYRO_REST_LIMIT`] that make a gyro fault: one outlier
+/// is not enough.
+pub const GYRO_REST_SAMPLES: u32 = 2;
+
+/// Inertial sensors (gyro, inclinometer, compass): a non-finite reading is a fault, and so is
+/// a gyro that reads a turn while the wheels stand still (a bias jump).
 #[derive(Default)]
 pub struct InertialSensors {
     frames: Option<Subscriber<FrameMsg>>,
+    /// The last wheel counts seen, to tell samples at rest.
+    counts: Option<(i64, i64)>,
+    /// At-rest samples in a row beyond the limit.
+    turning_at_rest: u32,
 }
 
 impl InertialSensors {
@@ -132,6 +153,7 @@ impl InertialSensors {
 
     fn check(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
         for f in frames(ctx, &self.frames)? {
+            self.check_rest(&f)?;
             for s in &f.imu {
                 for (name, value) in [
                     ("compass", s.compass_yaw),
@@ -145,6 +167,35 @@ impl InertialSensors {
                         )));
                     }
                 }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl InertialSensors {
+    /// The gyro at rest: a sample whose wheel counts equal the previous sample's (the rover
+    /// has not moved during it) must read about zero.
+    fn check_rest(&mut self, f: &FrameMsg) -> Result<(), ComponentFault> {
+        for (odo, imu) in f.odometry.iter().zip(&f.imu) {
+            let counts = (odo.left_counts, odo.right_counts);
+            let still = self.counts == Some(counts);
+            self.counts = Some(counts);
+            if !still || !imu.gyro_z.is_finite() {
+                continue;
+            }
+            if imu.gyro_z.abs() > GYRO_REST_LIMIT {
+                self.turning_at_rest += 1;
+                if self.turning_at_rest >= GYRO_REST_SAMPLES {
+                    return Err(ComponentFault(format!(
+                        "sensor fault: gyro reads {:.3} deg/s with the wheels still at t = {:.1} s (limit {:.2})",
+                        imu.gyro_z.to_degrees(),
+                        imu.t,
+                        GYRO_REST_LIMIT.to_degrees()
+                    )));
+                }
+            } else {
+                self.turning_at_rest = 0;
             }
         }
         Ok(())

@@ -1,6 +1,7 @@
-//! Fault injection from the mission file: a sensor that goes silent, a wheel that stalls and a
-//! compass that reads NaN each stop the rover with `help_requested`, the component that serves
-//! the sensor in Failure, a message naming the fault, and every executed command in the log.
+//! Fault injection from the mission file: a sensor that goes silent or returns NaN, a wheel that
+//! stalls, a compass that reads NaN, a gyro whose bias jumps and a component that crashes each
+//! stop the rover with `help_requested`, the failed component in Failure, a message naming the
+//! fault, the injection in the report, and every executed command in the log.
 
 mod common;
 
@@ -126,6 +127,79 @@ fn a_compass_reading_nan_stops_the_rover_with_a_sensor_fault() {
     assert!(has_nan(log.frames.last().unwrap()));
     assert!(log.frames[..log.frames.len() - 1].iter().all(|f| !has_nan(f)));
     assert!(log.frames.last().unwrap().t >= 30.0);
+}
+
+#[test]
+fn a_mast_camera_returning_nan_points_stops_the_rover_before_they_reach_the_map() {
+    let (r, log) = run_and_check_stop(
+        "kind = \"nan_range\"\nsensor = \"mast\"\nat_cycle = 4",
+        "range-sensors",
+        "sensor_fault",
+    );
+    let message = &r.fault.as_ref().unwrap().message;
+    assert!(message.contains("mast stereo") && message.contains("non-finite"), "{message}");
+    // The logged data: the last frame's mast cloud is NaN, no earlier frame has a NaN point.
+    let nan_points = |f: &SensorFrame| f.clouds.iter().flat_map(|c| &c.points).any(|p| p[0].is_nan());
+    assert!(nan_points(log.frames.last().unwrap()));
+    assert!(log.frames[..log.frames.len() - 1].iter().all(|f| !nan_points(f)));
+    let injected = &r.injected_faults[0];
+    assert_eq!(injected.kind, "nan_range");
+    assert!(injected.time_s <= r.fault.as_ref().unwrap().time_s);
+}
+
+#[test]
+fn a_gyro_bias_jump_is_seen_at_rest_and_stops_the_rover() {
+    let (r, log) = run_and_check_stop(
+        "kind = \"gyro_bias_jump\"\nrate_deg_s = 0.3\nat_time_s = 20.0",
+        "inertial-sensors",
+        "sensor_fault",
+    );
+    let message = &r.fault.as_ref().unwrap().message;
+    assert!(message.contains("gyro") && message.contains("wheels still"), "{message}");
+    // Independent check on the logged samples: before the jump every sample with the wheels
+    // still read under 0.05 deg/s; the stop came within two commands of the jump.
+    let injected = &r.injected_faults[0];
+    assert_eq!(injected.kind, "gyro_bias_jump");
+    let mut last = None;
+    for f in &log.frames {
+        for (o, s) in f.odometry.iter().zip(&f.imu) {
+            let counts = (o.left_counts, o.right_counts);
+            if last == Some(counts) && s.t < injected.time_s {
+                assert!(s.gyro_z.abs().to_degrees() < 0.05, "at rest before the jump: {}", s.gyro_z);
+            }
+            last = Some(counts);
+        }
+    }
+    let after = log.frames.iter().filter(|f| f.t >= injected.time_s).count();
+    assert!((1..=3).contains(&after), "{after} commands between the jump and the stop");
+}
+
+#[test]
+fn a_navigator_that_crashes_goes_to_failure_and_the_rover_stops() {
+    let (r, _) = run_and_check_stop(
+        "kind = \"component_crash\"\ncomponent = \"navigator\"\nat_cycle = 5",
+        "navigator",
+        "component_failure",
+    );
+    let fault = r.fault.as_ref().unwrap();
+    assert!(fault.message.contains("crashed"), "{}", fault.message);
+    assert_eq!(r.injected_faults.len(), 1);
+    assert_eq!(r.injected_faults[0].component.as_deref(), Some("navigator"));
+    assert_eq!(r.hazard_contacts, 0);
+}
+
+#[test]
+fn a_fault_naming_an_unknown_component_is_a_one_line_error() {
+    let text = common::small_yard(
+        "fault-yard",
+        3,
+        &format!(
+            "{}[[faults]]\nkind = \"component_crash\"\ncomponent = \"flux-capacitor\"\n",
+            common::SMALL_YARD_GOAL
+        ),
+    );
+    let e = Mission::from_toml(&text, "fault-yard").unwrap_err().to_string();
+    assert!(e.contains("faults[0].component") && !e.contains('\n'), "{e}");
 }
 
 /// Campaign `full`, trial 5: SR2 drove into a tilt hazard and kept commanding the same motion,

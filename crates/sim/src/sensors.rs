@@ -438,6 +438,11 @@ impl Proprioception {
         Self { bias, rng }
     }
 
+    /// Adds `delta` (rad/s) to the bias: a bias jump, as after a shock or a power glitch.
+    pub fn jump_bias(&mut self, delta: f64) {
+        self.bias += delta;
+    }
+
     /// Lets the bias random-walk over `dt` seconds.
     pub fn elapse(&mut self, model: &SensorModel, dt: f64) {
         if dt > 0.0 {

@@ -27,10 +27,15 @@ use crate::vehicle::{self, VehicleGeometry};
 const STALL_DETECT_TIME: f64 = 0.5;
 
 /// A failure injected into the simulated platform, for fault-protection tests.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Fault {
     /// The sensor returns images without points.
     SilentSensor(CameraKind),
+    /// The sensor returns images whose points are NaN (a failed correlator or a bad frame
+    /// buffer: the count of points is right, their values are not).
+    NanRange(CameraKind),
+    /// The gyro's bias jumps by this much (rad/s) and stays there.
+    GyroBiasJump(f64),
     /// The wheels of one side do not turn; the motor-current monitor stops the motion.
     StalledWheel {
         /// Left side when true, right side otherwise.
@@ -44,6 +49,7 @@ pub enum Fault {
 #[derive(Clone, Debug, Default)]
 struct Faults {
     silent: Vec<CameraKind>,
+    nan_range: Vec<CameraKind>,
     stalled_left: Option<bool>,
     compass_nan: bool,
 }
@@ -182,6 +188,12 @@ impl Simulator {
                     self.faults.silent.push(kind);
                 }
             }
+            Fault::NanRange(kind) => {
+                if !self.faults.nan_range.contains(&kind) {
+                    self.faults.nan_range.push(kind);
+                }
+            }
+            Fault::GyroBiasJump(delta) => self.proprio.jump_bias(delta),
             Fault::StalledWheel { left } => self.faults.stalled_left = Some(left),
             Fault::CompassNaN => self.faults.compass_nan = true,
         }
@@ -288,6 +300,10 @@ impl Simulator {
             self.take_pictures(pan, tilt, frame);
             return;
         }
+        if let SenseRequest::BodyPair { front } = *request {
+            self.take_body_pictures(front, frame);
+            return;
+        }
         let (geometry, imager) = match *request {
             SenseRequest::Mast { pan } => {
                 (RangeGeometry::mast(&self.rover, &self.model, pan), &self.model.mast)
@@ -302,7 +318,9 @@ impl Simulator {
                 (RangeGeometry::body(&self.rover, &self.model, false), &self.model.body)
             }
             SenseRequest::Lidar { pan } => (RangeGeometry::lidar(&self.model, pan), &self.model.lidar.imager),
-            SenseRequest::Navcam { .. } => unreachable!("pictures are taken above"),
+            SenseRequest::Navcam { .. } | SenseRequest::BodyPair { .. } => {
+                unreachable!("pictures are taken above")
+            }
         };
         let stereo = self.model.range_source == RangeSource::Stereo && geometry.camera != CameraKind::Lidar;
         let mut cloud = if stereo {
@@ -340,6 +358,11 @@ impl Simulator {
         if self.faults.silent.contains(&geometry.camera) {
             cloud.points.clear();
         }
+        if self.faults.nan_range.contains(&geometry.camera) {
+            for p in &mut cloud.points {
+                *p = [f32::NAN; 3];
+            }
+        }
         let dt = imager.capture_time.max(0.0);
         self.time += dt;
         self.proprio.elapse(&self.model, dt);
@@ -359,6 +382,26 @@ impl Simulator {
             &self.model.navcam,
             pan,
             tilt,
+            self.time,
+            seed,
+        );
+        frame.images.extend(pair);
+        let dt = self.model.navcam.capture_time_s.max(0.0);
+        self.time += dt;
+        self.proprio.elapse(&self.model, dt);
+    }
+
+    /// Takes both images of a body stereo pair: pictures, no range, not a sensing action.
+    fn take_body_pictures(&mut self, front: bool, frame: &mut SensorFrame) {
+        let seed: u64 = self.image_rng.random();
+        let pair = navcam::capture_body_pair(
+            &self.terrain,
+            &self.field,
+            &self.rover,
+            &self.truth,
+            &self.model.stereo,
+            &self.model.navcam,
+            front,
             self.time,
             seed,
         );
