@@ -9,8 +9,9 @@
 //!   sqrt 2, an axis edge runs between two cells at the cheaper one's cost); the optimum Field D*
 //!   improves on. Start and goal cells map to their minimum corner ([`Cell::corner`]).
 //!
-//! The heuristic is the octile distance (costs are >= 1, so it is consistent). Search arrays
-//! are flat and reused between queries; only the entries a search touched are reset.
+//! The heuristic is the octile distance (costs are >= 1, so it is consistent); [`AStar::dijkstra`]
+//! searches without it (Dijkstra's algorithm, the same search with h = 0). Search arrays are
+//! flat and reused between queries; only the entries a search touched are reset.
 
 use crate::heap::IndexedHeap;
 use crate::lattice::Lattice;
@@ -18,13 +19,18 @@ use crate::{Cell, CellChange, CostGrid, GlobalPlanner, GraphKind, Plan, PlanErro
 
 const NO_PARENT: u8 = u8::MAX;
 
+/// Row and column steps of the lattice's 8 directions (E, NE, N, NW, W, SW, S, SE).
+const STEP_RC: [(isize, isize); 8] = [(0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1), (-1, 0), (-1, 1)];
+
 /// The A* planner.
 #[derive(Clone, Debug)]
 pub struct AStar {
     graph: GraphKind,
+    heuristic: bool,
     grid: Option<CostGrid>,
     lat: Option<Lattice>,
     g: Vec<f64>,
+    /// Expanded in this search, or not a node of the graph at all (set once per grid).
     closed: Vec<bool>,
     parent: Vec<u8>,
     touched: Vec<u32>,
@@ -38,6 +44,7 @@ impl AStar {
     pub fn new(graph: GraphKind) -> Self {
         Self {
             graph,
+            heuristic: true,
             grid: None,
             lat: None,
             g: Vec::new(),
@@ -48,6 +55,12 @@ impl AStar {
             start: None,
             goal: None,
         }
+    }
+
+    /// Dijkstra's algorithm on the given graph: the same search without the heuristic (not in
+    /// the registry; the benchmarks' uninformed search).
+    pub fn dijkstra(graph: GraphKind) -> Self {
+        Self { heuristic: false, ..Self::new(graph) }
     }
 
     fn check(&self, what: &'static str, cell: Cell) -> Result<(), PlanError> {
@@ -78,7 +91,15 @@ impl AStar {
         }
         self.g[s] = 0.0;
         self.touched.push(s as u32);
-        self.heap.push_or_update(s, [lat.octile(s, t), 0.0]);
+        let heuristic = self.heuristic;
+        let w = lat.w;
+        let (tr, tc) = (t / w, t % w);
+        // Octile distance to the goal from a node's padded row and column (no division).
+        let h = |r: usize, c: usize| {
+            if heuristic { crate::octile_distance(r.abs_diff(tr), c.abs_diff(tc)) } else { 0.0 }
+        };
+        self.heap.push_or_update(s, [h(s / w, s % w), 0.0]);
+        let centres = self.graph == GraphKind::CellCentres;
         let mut expansions = 0;
         while let Some((_, u)) = self.heap.pop() {
             if u == t {
@@ -87,12 +108,28 @@ impl AStar {
             self.closed[u] = true;
             expansions += 1;
             let gu = self.g[u];
-            for k in 0..8 {
+            let (ur, uc) = (u / w, u % w);
+            let cu = lat.cost[u] as f64;
+            for (k, &(dr, dc)) in STEP_RC.iter().enumerate() {
                 let v = lat.step(u, k);
-                if !lat.valid[v] || self.closed[v] {
+                if self.closed[v] {
                     continue;
                 }
-                let e = lat.edge(u, k);
+                // The cell-centre edge written out (as `Lattice::edge`, same arithmetic).
+                let e = if centres {
+                    let cv = lat.cost[v] as f64;
+                    if k % 2 == 0 {
+                        0.5 * (cu + cv)
+                    } else if lat.cost[lat.step(u, k - 1)].is_infinite()
+                        || lat.cost[lat.step(u, (k + 1) % 8)].is_infinite()
+                    {
+                        continue;
+                    } else {
+                        0.5 * (cu + cv) * std::f64::consts::SQRT_2
+                    }
+                } else {
+                    lat.edge(u, k)
+                };
                 if !e.is_finite() {
                     continue;
                 }
@@ -103,8 +140,8 @@ impl AStar {
                     }
                     self.g[v] = gv;
                     self.parent[v] = ((k + 4) % 8) as u8;
-                    let h = lat.octile(v, t);
-                    self.heap.push_or_update(v, [gv + h, h]);
+                    let hv = h(ur.wrapping_add_signed(dr), uc.wrapping_add_signed(dc));
+                    self.heap.push_or_update(v, [gv + hv, hv]);
                 }
             }
         }
@@ -125,9 +162,11 @@ impl AStar {
 
 impl GlobalPlanner for AStar {
     fn name(&self) -> &'static str {
-        match self.graph {
-            GraphKind::CellCentres => "astar",
-            GraphKind::CornerNodes => "astar-corners",
+        match (self.graph, self.heuristic) {
+            (GraphKind::CellCentres, true) => "astar",
+            (GraphKind::CornerNodes, true) => "astar-corners",
+            (GraphKind::CellCentres, false) => "dijkstra",
+            (GraphKind::CornerNodes, false) => "dijkstra-corners",
         }
     }
     fn graph(&self) -> GraphKind {
@@ -137,7 +176,7 @@ impl GlobalPlanner for AStar {
         let lat = Lattice::new(&grid, self.graph);
         let n = lat.len();
         self.g = vec![f64::INFINITY; n];
-        self.closed = vec![false; n];
+        self.closed = lat.valid.iter().map(|&v| !v).collect();
         self.parent = vec![NO_PARENT; n];
         self.touched.clear();
         self.heap = IndexedHeap::new(n);

@@ -263,3 +263,33 @@ pub fn parse_grid_file(bytes: &[u8]) -> Result<CostGrid, ParseError> {
         Ok(crate::movingai::parse_map(text)?.cost_grid())
     }
 }
+
+/// Side of the local terrain window MRPTA senses around the rover (paper 004 section 3.3).
+pub const LOCAL_WINDOW: usize = 121;
+
+/// A 121x121 window of newly sensed terrain centred 40 cells ahead (row and column) of `rover`,
+/// clipped to the grid: with `changed`, every cost doubled and a row of obstacles across it
+/// (25 cells blocked in every 30, so the path must bend); without, the grid's own costs (the
+/// update that undoes it).
+pub fn window_update(grid: &CostGrid, rover: Cell, changed: bool) -> Vec<CellChange> {
+    let centre_row = (rover.row + 40).min(grid.rows().saturating_sub(1));
+    let centre_col = (rover.col + 40).min(grid.cols().saturating_sub(1));
+    let r0 = centre_row.saturating_sub(LOCAL_WINDOW / 2);
+    let c0 = centre_col.saturating_sub(LOCAL_WINDOW / 2);
+    let mut changes = Vec::with_capacity(LOCAL_WINDOW * LOCAL_WINDOW);
+    for row in r0..(r0 + LOCAL_WINDOW).min(grid.rows()) {
+        for col in c0..(c0 + LOCAL_WINDOW).min(grid.cols()) {
+            let cell = Cell::new(row, col);
+            let base = grid.cost(cell);
+            let cost = if !changed {
+                base
+            } else if row == centre_row && (col - c0) % 30 < 25 {
+                f32::INFINITY
+            } else {
+                base * 2.0
+            };
+            changes.push(CellChange { cell, cost });
+        }
+    }
+    changes
+}

@@ -11,7 +11,8 @@
 //! - [`movingai`] and [`pgm`]: parsers for the benchmark maps (text in, no file I/O).
 //! - [`segment_driver`]: cuts a planned path into straight segments and in-situ rotations
 //!   (paper 004 section 3.5).
-//! - [`benchmark`]: the logic behind `rovernav bench`.
+//! - [`benchmark`]: the logic behind `rovernav bench`; [`baseline`]: A*'s graph as a successor
+//!   function for general-purpose search libraries (the benchmarks' baseline).
 //!
 //! Grid coordinates: a [`Cell`] is (row, col) in the cost grid's own indexing. Continuous path
 //! points are [`Point2`]s in *grid units*: `x` runs along columns and `y` along rows, cell
@@ -19,6 +20,7 @@
 //! [`CostGrid::grid_to_world`] maps them to the world frame.
 
 pub mod astar;
+pub mod baseline;
 pub mod benchmark;
 pub mod cost_grid;
 pub mod dstar_lite;
