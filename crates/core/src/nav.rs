@@ -100,6 +100,12 @@ pub enum SenseRequest {
         /// Tilt angle, positive up (rad).
         tilt: f64,
     },
+    /// Both images of a body (Hazcam) stereo pair, a rectified pair: pictures for the tooling
+    /// arm's terrain model (AutoPlace), no range.
+    BodyPair {
+        /// The front pair (else the rear).
+        front: bool,
+    },
 }
 
 /// Conditions that stop a motion early, as a real rover's guarded moves do.

@@ -84,8 +84,8 @@ pub const NODES: &[NodeSpec] = &[
         name: "tooling-arm",
         layer: "platform",
         rate_hz: 10.0,
-        does: "places the instrument: holds the platform while it works",
-        build: |p| Ok(Box::new(ToolingArm::new(p.options.arm.clone()))),
+        does: "places the instrument by AutoPlace (images, octree, safe motion) or refuses; holds the platform while it works",
+        build: |p| Ok(Box::new(ToolingArm::new(p.options.arm.clone()).with_rover(p.rover.clone()))),
     },
     NodeSpec {
         name: "motion-controller",

@@ -10,6 +10,7 @@
 //! a [`remote`] platform, and [`scoring`] judges it against simulator truth. The autonomy only ever sees sensor
 //! messages; ground truth stays inside the simulator and is used solely to score the run.
 
+pub mod arm_server;
 pub mod camera_server;
 pub mod command_language;
 pub mod components;
@@ -37,7 +38,8 @@ pub use graph::Graph;
 pub use mission::{Mission, MissionError};
 pub use operator::{OperatorLink, ScriptedOperator};
 pub use report::{
-    ComponentReport, FaultReport, HazardEvent, LocalizationStats, Report, StageTimes, TaskReport,
+    ComponentReport, FaultReport, HazardEvent, LocalizationStats, PlacementReport, Report, StageTimes,
+    TaskReport,
 };
 pub use run::{
     BusKind, CycleRecord, NoObserver, Progress, Run, RunError, RunObserver, RunOptions, RunOutput,

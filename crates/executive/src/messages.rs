@@ -63,6 +63,9 @@ pub mod topics {
     pub const EXECUTIVE_CANCEL: Topic<CancelMsg> = Topic::new("/executive/cancel");
     /// Deliberative layer -> tooling arm: place an instrument or scoop.
     pub const ARM_COMMAND: Topic<ArmTaskMsg> = Topic::new("/arm/command");
+    /// Tooling arm -> displays and logs: one instrument placement (AutoPlace): the chosen target
+    /// or the refusal, the arm's joint states over time, the terrain octree.
+    pub const ARM_PLACEMENT: Topic<crate::arm_server::PlacementMsg> = Topic::new("/arm/placement");
     /// Reflexive layer -> deliberative layer: the state of each command it works on.
     pub const TASK_STATUS: Topic<TaskStatusMsg> = Topic::new("/executive/task_status");
     /// Pose estimator -> everyone: the pose estimate after each frame.
@@ -95,6 +98,7 @@ pub mod topics {
             row(EXECUTIVE_DRIVE_TO),
             row(EXECUTIVE_CANCEL),
             row(ARM_COMMAND),
+            row(ARM_PLACEMENT),
             row(TASK_STATUS),
             row(LOCALIZATION_ESTIMATE),
             row(LOCALIZATION_RESET),
@@ -142,6 +146,9 @@ pub enum Origin {
     Operator,
     /// A mission task (panorama, science image), by task id.
     Task(u64),
+    /// The tooling arm imaging its work volume for a task (AutoPlace), by task id: the task's
+    /// state is the arm's to report, not the platform's.
+    Arm(u64),
 }
 
 /// A platform command with its id and requester.
@@ -439,13 +446,14 @@ mod tests {
                 SenseRequest::BodyRear,
                 SenseRequest::Lidar { pan: -0.5 },
                 SenseRequest::Navcam { pan: 0.25, tilt: 0.75 },
+                SenseRequest::BodyPair { front: true },
             ]),
             NavCommand::Drive { distance: 1.0, curvature: 0.0, guard: DriveGuard::default() },
             NavCommand::Turn { angle: -1.25 },
             NavCommand::Finish(Outcome::HelpRequested, "stuck".into()),
         ];
         for (i, command) in commands.into_iter().enumerate() {
-            for origin in [Origin::Navigator, Origin::Operator, Origin::Task(7)] {
+            for origin in [Origin::Navigator, Origin::Operator, Origin::Task(7), Origin::Arm(8)] {
                 plain(MotionRequest { id: i as u64, origin, command: command.clone() });
             }
         }
@@ -504,7 +512,7 @@ mod tests {
     #[test]
     fn every_topic_name_is_valid_and_has_a_schema() {
         let all = topics::all();
-        assert_eq!(all.len(), 17);
+        assert_eq!(all.len(), 18);
         for (name, schema) in all {
             assert!(rovernav_bus::check_topic_name(name).is_ok(), "{name}");
             assert!(schema["type"].is_string() || schema["oneOf"].is_array(), "{name}: {schema}");

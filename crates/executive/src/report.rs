@@ -158,6 +158,26 @@ pub struct TaskReport {
     pub state: String,
     /// The last word on it.
     pub message: String,
+    /// For `place_instrument`: what AutoPlace decided (absent for other tasks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub placement: Option<PlacementReport>,
+}
+
+/// What AutoPlace decided for a `place_instrument` task.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+pub struct PlacementReport {
+    /// `placed` | `refused`.
+    pub outcome: String,
+    /// Why refused: `no_data` | `normal` | `roughness` | `reach` | `collision`.
+    pub reason: Option<String>,
+    /// Angle between the approach and the sensed surface normal (deg), if placed.
+    pub contact_angle_deg: Option<f64>,
+    /// The chosen target (world frame by the pose estimate, m), if placed.
+    pub target: Option<[f64; 3]>,
+    /// Its sensed surface normal (world frame), if placed.
+    pub normal: Option<[f64; 3]>,
+    /// Candidate targets examined.
+    pub examined: usize,
 }
 
 /// Mean wall-clock seconds per cycle spent in each stage of the loop.

@@ -316,6 +316,7 @@ pub(crate) fn registry_name(mission: &RunSettings) -> String {
 /// The report's executive part: final component states, the diagnosed fault and each task's
 /// state (the same for a local and a remote run).
 fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
+    let placements = runtime.get::<crate::arm_server::ToolingArm>().map_or(&[][..], |a| a.placements());
     Report {
         components: runtime
             .states()
@@ -342,6 +343,12 @@ fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
                 target: t.kind.target().map(|p| [p.x, p.y]),
                 state: t.state.as_str().into(),
                 message: t.message.clone(),
+                placement: placements
+                    .iter()
+                    .rev()
+                    .find(|p| Some(p.task) == t.command())
+                    .filter(|_| matches!(t.kind, crate::deliberative::TaskKind::PlaceInstrument { .. }))
+                    .map(|p| p.report()),
             })
             .collect(),
         ..Report::default()

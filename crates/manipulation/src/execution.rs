@@ -1,15 +1,30 @@
-//! Scoring a placement against the simulator's truth: the arm is moved along its plan (every
-//! joint-space segment sampled 5 mm apart), the straight move stops when the instrument's
-//! contact face meets the true surface (the contact sensor), and every executed pose is tested
-//! against the true height field (rocks included), the rover's body and the arm itself. The
-//! contact angle error is the angle between the approach and the true surface normal, a plane
-//! fitted to the true heights within 3 cm of the contact.
+//! Executing a placement on a true terrain, for scoring only (the autonomy never calls it):
+//! the arm is moved along its plan (every joint-space segment sampled 5 mm apart), the straight
+//! move stops when the instrument's contact face meets the true surface (the contact sensor),
+//! and every executed pose is tested against the true height field (rocks included), the
+//! rover's body and the arm itself. The contact angle error is the angle between the approach
+//! and the true surface normal, a plane fitted to the true heights within 3 cm of the contact.
+//!
+//! The truth is a [`Ground`]: the true surface height at a point of the arm's (body) frame,
+//! so that `rovernav eval autoplace` (whose body frame is the world frame) and a mission test
+//! (the rover anywhere on a site) score the same way.
 
+use crate::arm::{Arm, Joints};
+use crate::feasibility::{Plan, interpolate, trimmed};
+use crate::geometry::Capsule;
 use nalgebra::{Matrix3, Vector3};
-use rovernav_manipulation::arm::{Arm, Joints};
-use rovernav_manipulation::feasibility::{Plan, interpolate, trimmed};
-use rovernav_manipulation::geometry::Capsule;
-use rovernav_terrain::Dem;
+
+/// The true surface: its height (body z, m) at body (x, y), `None` off the known terrain.
+pub trait Ground {
+    /// Height of the surface at (x, y).
+    fn height(&self, x: f64, y: f64) -> Option<f64>;
+}
+
+impl<F: Fn(f64, f64) -> Option<f64>> Ground for F {
+    fn height(&self, x: f64, y: f64) -> Option<f64> {
+        self(x, y)
+    }
+}
 
 /// What executing a plan did in truth.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -30,7 +45,7 @@ const CONTACT_ALLOWANCE: f64 = 0.03;
 
 /// Whether a capsule meets the height field: some point within `radius` of its axis lies
 /// below the surface (axis and disc sampled 5 mm apart).
-pub fn capsule_hits_terrain(dem: &Dem, c: &Capsule) -> bool {
+pub fn capsule_hits_terrain(dem: &dyn Ground, c: &Capsule) -> bool {
     let r = c.radius;
     let n = (r / 0.005).ceil() as i32;
     c.cover(0.005).any(|p| {
@@ -53,7 +68,7 @@ pub fn capsule_hits_terrain(dem: &Dem, c: &Capsule) -> bool {
 }
 
 /// What the arm at `q` meets; the instrument's last `exempt` metres may touch the terrain.
-fn pose_hits(arm: &Arm, dem: &Dem, q: &Joints, exempt: f64) -> Option<&'static str> {
+fn pose_hits(arm: &Arm, dem: &dyn Ground, q: &Joints, exempt: f64) -> Option<&'static str> {
     if arm.self_collides(q) {
         return Some("self");
     }
@@ -70,7 +85,7 @@ fn pose_hits(arm: &Arm, dem: &Dem, q: &Joints, exempt: f64) -> Option<&'static s
 
 /// The true surface normal at (x, y): least-squares plane through the heights within 3 cm (the
 /// contact footprint, the patch AutoPlace estimates its normal from).
-pub fn true_normal(dem: &Dem, x: f64, y: f64) -> Vector3<f64> {
+pub fn true_normal(dem: &dyn Ground, x: f64, y: f64) -> Vector3<f64> {
     let mut ata = Matrix3::zeros();
     let mut atb = Vector3::zeros();
     for i in -6..=6 {
@@ -91,7 +106,7 @@ pub fn true_normal(dem: &Dem, x: f64, y: f64) -> Vector3<f64> {
 }
 
 /// Executes `plan` on the true terrain.
-pub fn execute(arm: &Arm, dem: &Dem, plan: &Plan) -> Execution {
+pub fn execute(arm: &Arm, dem: &dyn Ground, plan: &Plan) -> Execution {
     let step = 0.005;
     for w in plan.via.windows(2) {
         for q in interpolate(arm, &w[0], &w[1], step) {
@@ -134,25 +149,17 @@ pub fn execute(arm: &Arm, dem: &Dem, plan: &Plan) -> Execution {
     Execution { collision: None, contact: false, normal_error_deg: angle(dem, &tip, &axis), stop: tip.into() }
 }
 
-fn angle(dem: &Dem, tip: &Vector3<f64>, axis: &Vector3<f64>) -> f64 {
+fn angle(dem: &dyn Ground, tip: &Vector3<f64>, axis: &Vector3<f64>) -> f64 {
     true_normal(dem, tip.x, tip.y).angle(&-axis).to_degrees()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rovernav_core::{Grid2, GridGeometry};
 
     #[test]
     fn true_normal_of_a_tilted_plane_and_capsule_contact() {
-        let g = GridGeometry { cols: 100, rows: 100, resolution: 0.01, origin_x: 0.0, origin_y: 0.0 };
-        let mut h = Grid2::filled(g, 0f32);
-        for r in 0..100 {
-            for c in 0..100 {
-                *h.get_mut(c, r) = (0.3 * (c as f64 + 0.5) * 0.01) as f32;
-            }
-        }
-        let dem = Dem::from_grid(h);
+        let dem = |x: f64, y: f64| ((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y)).then_some(0.3 * x);
         let n = true_normal(&dem, 0.5, 0.5);
         assert!(n.angle(&Vector3::new(-0.3, 0.0, 1.0)) < 1e-4, "{n:?}");
         let z = 0.12;

@@ -9,12 +9,18 @@
 //! - [`targets`]: the closest sensed point, candidates around it, normal and roughness.
 //! - [`feasibility`]: via-points from the stowed pose, swept-volume checks against the octree.
 //! - [`autoplace`]: the whole decision: placed, or refused with its reason.
+//! - [`sensing`]: a rectified stereo pair of images into body-frame points (the only input).
+//! - [`motion`]: a placement in time: the joint states out, the dwell, and back.
+//! - [`execution`]: a plan executed on a true terrain (scoring only, never the autonomy).
 
 pub mod arm;
 pub mod autoplace;
+pub mod execution;
 pub mod feasibility;
 pub mod geometry;
+pub mod motion;
 pub mod octree;
+pub mod sensing;
 pub mod targets;
 
 pub use arm::{Arm, ArmGeometry, Joints};

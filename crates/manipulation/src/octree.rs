@@ -388,6 +388,27 @@ impl Octree {
         out
     }
 
+    /// Every leaf as stored (a merged octant whole): its state, lower corner (m) and side (m),
+    /// in depth-first order. The compact form of the model for logs and pictures.
+    pub fn leaves(&self) -> Vec<(Cell, V3, f64)> {
+        let mut out = Vec::new();
+        let size = self.params.leaf * self.side() as f64;
+        let mut stack = vec![(0usize, V3::from(self.params.min), size)];
+        while let Some((node, min, side)) = stack.pop() {
+            match Node::from(self.nodes[node]) {
+                Node::Leaf(s) => out.push((s, min, side)),
+                Node::Branch(first) => {
+                    let h = 0.5 * side;
+                    for o in (0..8).rev() {
+                        let off = V3::new((o & 1) as f64, ((o >> 1) & 1) as f64, ((o >> 2) & 1) as f64) * h;
+                        stack.push((first as usize + o, min + off, h));
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// Nodes held (leaves and branches).
     pub fn node_count(&self) -> usize {
         self.nodes.len()

@@ -21,11 +21,11 @@
 
 mod scene;
 mod sensing;
-mod truth;
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use rovernav_core::RoverConfig;
+use rovernav_manipulation::execution as truth;
 use rovernav_manipulation::feasibility::interpolate;
 use rovernav_manipulation::{Arm, AutoPlaceParams, Outcome, Reason, View, autoplace, place_with};
 use scene::Kind;
@@ -61,7 +61,7 @@ pub struct Trial {
     /// Candidates examined.
     pub examined: usize,
     /// Points each stereo pair sensed.
-    pub points: BTreeMap<&'static str, usize>,
+    pub points: BTreeMap<String, usize>,
     /// Chosen target (body frame, m), if placed.
     pub target: Option<[f64; 3]>,
     /// Its estimated normal, if placed.
@@ -200,7 +200,7 @@ fn trial(seed: u64, imaging: &sensing::Imaging) -> Trial {
             &params,
         ) {
             Outcome::Placed { plan, .. } => {
-                let e = truth::execute(&arm, &terrain.dem, &plan);
+                let e = truth::execute(&arm, &|x, y| terrain.dem.height(x, y), &plan);
                 if e.collision.is_some() { "collided".to_string() } else { "placed".to_string() }
             }
             Outcome::Refused { reason, .. } => reason.name().to_string(),
@@ -208,11 +208,11 @@ fn trial(seed: u64, imaging: &sensing::Imaging) -> Trial {
     });
     // A hidden-rock scene whose naive planner found no path has no rock in any path: score it
     // as the target kind it really is.
-    let points = pairs.iter().map(|p| (p.name, p.points.len())).collect();
+    let points = pairs.iter().map(|p| (p.name.clone(), p.points.len())).collect();
     let kind = if scene.kind == Kind::HiddenRock && !hidden_ready { Kind::Soil } else { scene.kind };
     match outcome {
         Outcome::Placed { target, plan, examined } => {
-            let e = truth::execute(&arm, &terrain.dem, &plan);
+            let e = truth::execute(&arm, &|x, y| terrain.dem.height(x, y), &plan);
             Trial {
                 seed,
                 kind,

@@ -43,28 +43,74 @@ pub fn capture_pair(
     time: f64,
     seed: u64,
 ) -> [CameraImage; 2] {
-    let sun = Sun::on_mars(lighting.local_time_h, lighting.latitude_deg, lighting.ls_deg);
-    let mut scene = Scene::new(terrain, field, &sun, lighting.atmosphere).with_rover(rover, truth, pan);
-    scene.volumes = navcam.volumes.clone();
-    scene.time = time;
-    let rig = Rig::new(rover).with_size(navcam.width.max(16));
-    let settings = RenderSettings::default();
-    ["navcam_left", "navcam_right"].map(|name| {
-        let camera = rig.camera(name, pan, tilt).expect("the rig has both Navcams");
-        // Body-mounted cameras ignore the site pose.
-        let model = camera.in_world(truth, truth);
-        let image = render::render(&scene, &model, name, &settings, seed).image;
-        CameraImage {
-            camera: name.into(),
-            t: time,
-            width: image.width(),
-            height: image.height(),
-            bits: 12,
-            pixels: image.into_raw(),
-            pan,
-            tilt,
-        }
-    })
+    let shot = Shot { terrain, field, rover, truth, lighting, navcam, time, seed };
+    shot.render(["navcam_left", "navcam_right"], pan, tilt)
+}
+
+/// Renders both images of a body (Hazcam) stereo pair, front or rear, at the Navcams' image
+/// size from the rover's true pose (the mast head stays forward): pictures for the tooling
+/// arm's terrain model.
+#[allow(clippy::too_many_arguments)]
+pub fn capture_body_pair(
+    terrain: &Terrain,
+    field: &HeightField,
+    rover: &RoverConfig,
+    truth: &Pose3,
+    lighting: &StereoImaging,
+    navcam: &NavcamImaging,
+    front: bool,
+    time: f64,
+    seed: u64,
+) -> [CameraImage; 2] {
+    let shot = Shot { terrain, field, rover, truth, lighting, navcam, time, seed };
+    let names = if front {
+        ["hazcam_front_left", "hazcam_front_right"]
+    } else {
+        ["hazcam_rear_left", "hazcam_rear_right"]
+    };
+    shot.render(names, 0.0, 0.0)
+}
+
+/// What one rendered pair shares: the world, the pose, the light and the time.
+struct Shot<'a> {
+    terrain: &'a Terrain,
+    field: &'a HeightField,
+    rover: &'a RoverConfig,
+    truth: &'a Pose3,
+    lighting: &'a StereoImaging,
+    navcam: &'a NavcamImaging,
+    time: f64,
+    seed: u64,
+}
+
+impl Shot<'_> {
+    /// Renders the two rig cameras `names` (the mast head at `pan`, `tilt`).
+    fn render(&self, names: [&str; 2], pan: f64, tilt: f64) -> [CameraImage; 2] {
+        let l = self.lighting;
+        let sun = Sun::on_mars(l.local_time_h, l.latitude_deg, l.ls_deg);
+        let mut scene =
+            Scene::new(self.terrain, self.field, &sun, l.atmosphere).with_rover(self.rover, self.truth, pan);
+        scene.volumes = self.navcam.volumes.clone();
+        scene.time = self.time;
+        let rig = Rig::new(self.rover).with_size(self.navcam.width.max(16));
+        let settings = RenderSettings::default();
+        names.map(|name| {
+            let camera = rig.camera(name, pan, tilt).expect("the rig has every body and mast camera");
+            // Body-mounted cameras ignore the site pose.
+            let model = camera.in_world(self.truth, self.truth);
+            let image = render::render(&scene, &model, name, &settings, self.seed).image;
+            CameraImage {
+                camera: name.into(),
+                t: self.time,
+                width: image.width(),
+                height: image.height(),
+                bits: 12,
+                pixels: image.into_raw(),
+                pan,
+                tilt,
+            }
+        })
+    }
 }
 
 #[cfg(test)]

@@ -1,8 +1,8 @@
 //! The command language's help: one entry per command, its usage forms and details.
 
 use super::{
-    CommandError, USAGE_DRIVE, USAGE_GOTO, USAGE_HELP, USAGE_SET, USAGE_TURN, USAGE_WAYPOINT_ADD,
-    unknown_topic,
+    CommandError, USAGE_DRIVE, USAGE_GOTO, USAGE_HELP, USAGE_PLACE, USAGE_SET, USAGE_TURN,
+    USAGE_WAYPOINT_ADD, unknown_topic,
 };
 
 /// One command's help: its usage forms with a summary each, and the details shown by `help NAME`.
@@ -64,6 +64,14 @@ pub(super) const HELP: &[HelpEntry] = &[
         ],
         detail: "The rover re-finds the target after each step of at most 10 % of the distance and stops 1 m \
                  short of it; a lost target stops it and asks for help. ROW and COL in pixels (suffix px).",
+    },
+    HelpEntry {
+        name: "place",
+        forms: &[(USAGE_PLACE, "place the instrument on (X, Y) with AutoPlace, or refuse with the reason")],
+        detail: "X east, Y north in metres, within the arm's reach in front of the rover (0.4-1.2 m, 45 deg either \
+                 side). The rover turns to face the point if needed, images it with the front Hazcams and the \
+                 Navcams, and places on the safe target nearest it; a refusal (no_data, normal, roughness, \
+                 reach, collision) moves nothing.",
     },
     HelpEntry {
         name: "status",

@@ -10,7 +10,7 @@
 //! goto X Y                     waypoint add X Y | waypoint clear | waypoint list
 //! mission start | pause | abort  stop   status   help [COMMAND]
 //! drive D                      turn A              set position X Y [YAW]
-//! track ROW COL | track X Y Z
+//! track ROW COL | track X Y Z   place X Y
 //! ```
 //!
 //! A `#` starts a comment running to the end of the line; blank and comment-only lines parse to
@@ -94,6 +94,14 @@ pub enum OperatorCommand {
         /// Up (m).
         z: f64,
     },
+    /// `place X Y`: place the instrument on the site-frame point (X, Y) with AutoPlace (a
+    /// `place_instrument` task queued next).
+    Place {
+        /// East (m).
+        x: f64,
+        /// North (m).
+        y: f64,
+    },
     /// `status`: print the rover's state.
     Status,
     /// `help [COMMAND]`: list the commands, or describe one.
@@ -114,7 +122,7 @@ pub const MAX_PIXEL: f64 = 100_000.0;
 
 /// Every command's first keyword, in the order `help` lists them (for completion and help topics).
 pub const COMMAND_NAMES: &[&str] =
-    &["goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "status", "help"];
+    &["goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "place", "status", "help"];
 
 /// A malformed command line or unknown help topic: which token was wrong and what was expected.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -152,6 +160,7 @@ const USAGE_TURN: &str = "turn A";
 const USAGE_SET: &str = "set position X Y [YAW]";
 const USAGE_HELP: &str = "help [COMMAND]";
 const USAGE_TRACK: &str = "track ROW COL | track X Y Z";
+const USAGE_PLACE: &str = "place X Y";
 
 fn unknown_topic(index: usize, topic: &str) -> CommandError {
     CommandError {
@@ -355,6 +364,12 @@ pub fn parse_command(line: &str) -> Result<Option<OperatorCommand>, CommandError
                 OperatorCommand::TrackSite { x, y, z }
             }
         }
+        "place" => {
+            let x = tokens.number(Unit::Metres, "X", USAGE_PLACE)?;
+            let y = tokens.number(Unit::Metres, "Y", USAGE_PLACE)?;
+            tokens.end(USAGE_PLACE)?;
+            OperatorCommand::Place { x, y }
+        }
         "status" => {
             tokens.end("status")?;
             OperatorCommand::Status
@@ -440,6 +455,7 @@ impl fmt::Display for OperatorCommand {
             Self::TrackSite { x, y, z } => {
                 write!(f, "track {} {} {}", number_text(*x), number_text(*y), number_text(*z))
             }
+            Self::Place { x, y } => write!(f, "place {} {}", number_text(*x), number_text(*y)),
             Self::Status => f.write_str("status"),
             Self::Help { topic: None } => f.write_str("help"),
             Self::Help { topic: Some(topic) } => write!(f, "help {topic}"),

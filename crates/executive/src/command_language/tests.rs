@@ -166,6 +166,23 @@ fn track_takes_a_pixel_or_a_site_point() {
 }
 
 #[test]
+fn place_takes_a_site_point_in_metres_strictly() {
+    assert_eq!(parsed("place 10.3 -2"), OperatorCommand::Place { x: 10.3, y: -2.0 });
+    assert_eq!(parsed("PLACE 1m 2.5M # on the rock"), OperatorCommand::Place { x: 1.0, y: 2.5 });
+    assert_eq!(parsed("place 10.3 -2").to_string(), "place 10.3 -2");
+    fails_at("place 1", 3, None, "a number (metres) for Y in \"place X Y\"");
+    fails_at("place NaN 2", 2, Some("NaN"), "for X");
+    fails_at("place 1 inf", 3, Some("inf"), "for Y");
+    fails_at("place 1deg 2", 2, Some("1deg"), "metres");
+    fails_at("place 1 2 3", 4, Some("3"), "end of line after \"place X Y\"");
+    let limit = MAX_COORDINATE_M;
+    fails_at(&format!("place {} 0", 2.0 * limit), 2, Some(&format!("{}", 2.0 * limit)), "magnitude at most");
+    assert_eq!(parsed(&format!("place {limit} -{limit}")), OperatorCommand::Place { x: limit, y: -limit });
+    let help = help_text(Some("place")).expect("place has help");
+    assert!(help.starts_with("place X Y: ") && help.contains("collision"), "{help}");
+}
+
+#[test]
 fn help_lists_every_command_and_describes_each() {
     let list = help_text(None).expect("full list");
     for name in COMMAND_NAMES {
@@ -254,6 +271,7 @@ fn command() -> impl Strategy<Value = OperatorCommand> {
         }),
         (finite(), finite()).prop_map(|(row, col)| C::TrackPixel { row, col }),
         (finite(), finite(), finite()).prop_map(|(x, y, z)| C::TrackSite { x, y, z }),
+        (finite(), finite()).prop_map(|(x, y)| C::Place { x, y }),
         Just(C::Status),
         proptest::option::of(proptest::sample::select(COMMAND_NAMES))
             .prop_map(|topic| C::Help { topic: topic.map(str::to_string) }),

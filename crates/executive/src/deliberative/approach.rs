@@ -15,7 +15,7 @@
 //! `track ROW COL` designates a pixel of the last left Navcam image the rover took; `track X Y
 //! Z` a site point. Both add an approach task after the current step and drive the rover there.
 
-use super::{Deliberative, Role, TaskKind};
+use super::{Deliberative, TaskKind};
 use crate::messages::{
     CommandMsg, DriveToMsg, FrameMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState, TaskStatusMsg,
     topics,
@@ -260,17 +260,7 @@ impl Deliberative {
         if matches!(designation, Designation::Pixel { .. }) && self.last_navcam.is_none() {
             return "error: `track ROW COL`: the rover has taken no Navcam image yet".into();
         }
-        let kind = TaskKind::ApproachTarget { designation, standoff: TRACK_STANDOFF_M };
-        let task = self.new_task(kind, false, Role::Extra);
-        let id = task.id;
-        let at = (self.cursor + 1).min(self.tasks.len());
-        let at = if self.tasks.get(self.cursor).is_some_and(|t| t.state == TaskState::Pending) {
-            self.cursor
-        } else {
-            at
-        };
-        self.tasks.insert(at, task);
-        format!("task {id} added: {}", kind.describe())
+        self.queue(TaskKind::ApproachTarget { designation, standoff: TRACK_STANDOFF_M })
     }
 
     /// The target estimates of approach task `id` along the way (site frame, m).

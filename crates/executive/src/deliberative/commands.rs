@@ -30,7 +30,8 @@ impl Deliberative {
             C::Goto { x, y }
             | C::WaypointAdd { x, y }
             | C::SetPosition { x, y, .. }
-            | C::TrackSite { x, y, .. } => Some((*x, *y)),
+            | C::TrackSite { x, y, .. }
+            | C::Place { x, y } => Some((*x, *y)),
             _ => None,
         };
         if let (Some([x0, y0, x1, y1]), Some((x, y))) = (self.area, target)
@@ -85,12 +86,27 @@ impl Deliberative {
             }
             C::TrackPixel { row, col } => self.track(super::Designation::Pixel { row, col }),
             C::TrackSite { x, y, z } => self.track(super::Designation::Site { x, y, z }),
+            C::Place { x, y } => self.queue(TaskKind::PlaceInstrument { target: Point2::new(x, y) }),
             C::Status => self.status_text(),
             C::Help { topic } => match help_text(topic.as_deref()) {
                 Ok(text) => text.trim_end().to_string(),
                 Err(e) => format!("error: {e}"),
             },
         })
+    }
+
+    /// Queues an operator's task to run next: at the cursor if the task there has not started,
+    /// else right after it.
+    pub(super) fn queue(&mut self, kind: TaskKind) -> String {
+        let task = self.new_task(kind, false, Role::Extra);
+        let id = task.id;
+        let at = if self.tasks.get(self.cursor).is_some_and(|t| t.state == TaskState::Pending) {
+            self.cursor
+        } else {
+            (self.cursor + 1).min(self.tasks.len())
+        };
+        self.tasks.insert(at, task);
+        format!("task {id} added: {}", kind.describe())
     }
 
     fn state_name(&self) -> &'static str {

@@ -177,3 +177,10 @@ pub struct Task {
     /// An arm task is turning the rover to face its target before deploying the arm.
     pub(super) aiming: bool,
 }
+
+impl Task {
+    /// Id of the command standing (or last standing) for this task in the reflexive layer.
+    pub fn command(&self) -> Option<u64> {
+        self.command
+    }
+}

@@ -76,6 +76,18 @@ proptest! {
             }
         }
         prop_assert_eq!(tree.counts(), counts);
+        // The stored leaves tile the cube, each agreeing with every grid cell it covers.
+        let mut covered = 0u64;
+        for (state, min, side) in tree.leaves() {
+            let m = (side / 0.1).round() as usize;
+            let at = min.map(|x| (x / 0.1).round() as usize);
+            covered += (m * m * m) as u64;
+            for c in 0..m * m * m {
+                let (i, j, k) = (at.x + c % m, at.y + (c / m) % m, at.z + c / (m * m));
+                prop_assert_eq!(brute[i + n * (j + n * k)], state);
+            }
+        }
+        prop_assert_eq!(covered, (n * n * n) as u64);
         let dense = DenseGrid::build(&params, &[View { cameras: &cams, points: &pts }]);
         prop_assert_eq!(&dense.cells, &brute);
         // `blocked` against a scan of every cell.

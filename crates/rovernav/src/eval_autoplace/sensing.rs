@@ -1,5 +1,6 @@
 //! What AutoPlace sees of a scene: stereo pairs rendered by the simulator's renderer and
-//! correlated by semi-global matching, nothing else (the simulator's truth only scores).
+//! correlated by `rovernav_manipulation::sensing` (the code the executive's tooling arm runs),
+//! nothing else (the simulator's truth only scores).
 //!
 //! Three pairs, all body cameras of the rig (`rovernav_vision::rig`):
 //! - the "ultimate" front Hazcam pair at the final position: target selection and terrain;
@@ -20,26 +21,17 @@
 //! of every pair, as deep shadow or glare does: the correlator's texture test rejects them.
 
 use super::scene::{Hole, Scene};
-use nalgebra::{Isometry3, Point2, Translation3, Vector3};
+use nalgebra::{Isometry3, Point2, Translation3};
 use rovernav_core::RoverConfig;
 use rovernav_manipulation::geometry::Aabb;
+use rovernav_manipulation::sensing::{Correlation, correlate, mask_rover};
 use rovernav_sim::HeightField;
 use rovernav_sim::render::{self, Atmosphere, RenderSettings, Rig, Sun};
 use rovernav_terrain::Terrain;
 use rovernav_vision::camera::Movable;
-use rovernav_vision::stereo::{self, StereoParams, StereoRig};
 use rovernav_vision::{Cahv, CameraModel};
 
-/// One correlated pair in the final body frame.
-#[derive(Clone, Debug)]
-pub struct Pair {
-    /// Which pair.
-    pub name: &'static str,
-    /// Camera centres (m).
-    pub cameras: Vec<Vector3<f64>>,
-    /// Sensed points (m).
-    pub points: Vec<[f32; 3]>,
-}
+pub use rovernav_manipulation::sensing::Pair;
 
 /// Imaging settings.
 #[derive(Clone, Debug)]
@@ -60,24 +52,6 @@ impl Default for Imaging {
     }
 }
 
-/// Whether the segment `a`-`b` crosses the box (slab test).
-fn segment_hits_box(a: &Vector3<f64>, b: &Vector3<f64>, bx: &Aabb) -> bool {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for k in 0..3 {
-        if d[k].abs() < 1e-12 {
-            if a[k] < bx.min[k] || a[k] > bx.max[k] {
-                return false;
-            }
-        } else {
-            let (s, t) = ((bx.min[k] - a[k]) / d[k], (bx.max[k] - a[k]) / d[k]);
-            t0 = t0.max(s.min(t));
-            t1 = t1.min(s.max(t));
-        }
-    }
-    t0 <= t1
-}
-
 /// Renders one pair from the body pose `body_to_world`, blanks the holes, correlates, and
 /// returns points and centres moved by `to_final` (capture body frame -> final body frame).
 #[allow(clippy::too_many_arguments)]
@@ -93,7 +67,7 @@ fn capture(
     seed: u64,
 ) -> Pair {
     let settings = RenderSettings::default();
-    let mut images = [left, right].map(|cam| {
+    let images = [left, right].map(|cam| {
         let world = cam.moved(body_to_world);
         let mut out = render::render(scene, &world, name, &settings, seed);
         let w = out.width();
@@ -112,27 +86,9 @@ fn capture(
         }
         out
     });
-    let [l, r] = &mut images;
-    let rig = StereoRig::new(*left, *right).expect("rig pairs are rectified");
-    let near = 0.35;
-    let max_disparity = ((rig.focal_baseline() / near) * 1.2).ceil() as usize;
-    let params = StereoParams {
-        max_disparity: max_disparity.clamp(16, 128),
-        lr_tolerance: 0.5,
-        ..StereoParams::default()
-    };
-    let disparity =
-        stereo::compute_disparity(&l.image, &r.image, &params).expect("one size, within the volume bound");
-    let range = rig.range_image(&disparity, stereo::range::DEFAULT_SIGMA_D_PX);
-    let mut points = Vec::new();
-    for (p, rg) in range.points.iter().zip(&range.range) {
-        if rg.is_finite() && (*rg as f64) < imaging.max_range && p.iter().all(|v| v.is_finite()) {
-            let q = to_final * nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            points.push([q.x as f32, q.y as f32, q.z as f32]);
-        }
-    }
-    let cameras = [left.c, right.c].iter().map(|c| (to_final * nalgebra::Point3::from(*c)).coords).collect();
-    Pair { name, cameras, points }
+    let [l, r] = &images;
+    let settings = Correlation { max_range: imaging.max_range, ..Correlation::default() };
+    correlate(name, left, right, &l.image, &r.image, to_final, &settings).expect("rig pairs are rectified")
 }
 
 /// The three pairs of a scene: ultimate Hazcam (first), penultimate Hazcam, Navcam.
@@ -159,10 +115,6 @@ pub fn sense(
         capture("hazcam_penultimate", &render_scene, &hl, &hr, &back, &back, &scene.holes, imaging, seed ^ 1);
     let mut navcam =
         capture("navcam", &render_scene, &nl, &nr, &here, &here, &scene.holes, imaging, seed ^ 2);
-    let cams = navcam.cameras.clone();
-    navcam.points.retain(|p| {
-        let q = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-        !cams.iter().any(|c| rover_boxes.iter().any(|b| segment_hits_box(c, &q, b)))
-    });
+    mask_rover(&mut navcam, rover_boxes);
     vec![ultimate, penultimate, navcam]
 }
