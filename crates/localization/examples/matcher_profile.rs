@@ -3,6 +3,15 @@
 
 use rovernav_localization::benchmark::{localisation_workload, scan_window_workload, time_match};
 
+/// This thread's CPU time (s), from Linux's schedstat (0 elsewhere): wall time is unreliable
+/// on a shared machine.
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
+        .map_or(0.0, |ns| ns * 1e-9)
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let which = args.get(1).map_or("localisation", String::as_str);
@@ -27,9 +36,13 @@ fn main() {
             continue;
         }
         for _ in 0..repeats {
-            match time_match(&workload, exhaustive) {
+            let cpu = cpu_seconds();
+            let result = time_match(&workload, exhaustive);
+            let cpu = cpu_seconds() - cpu;
+            match result {
                 Ok(t) => println!(
-                    "{} {}: {:.4} s, score {:.6}, best {:?}, error {:.3} m, {} poses' worth of lookups of {} lattice poses, {} boxes",
+                    "cpu {:.4} s; {} {}: {:.4} s, score {:.6}, best {:?}, error {:.3} m, {} poses' worth of lookups of {} lattice poses, {} boxes",
+                    cpu,
                     workload.name,
                     if exhaustive { "exhaustive" } else { "branch and bound" },
                     t.seconds,

@@ -39,6 +39,15 @@
 //!   bounded on the distance transform before they are scored, and scored only if they may
 //!   win. Exactness is untouched: every bound is a sum of per-cell upper bounds, whichever
 //!   cells were looked up (62.5 on the 100 cases, all exact).
+//! - Wall time (issue 43; profiled with `perf record` on `benchmark::localisation_workload`,
+//!   39 000 local cells): the box bounds' lookups cost about 20 ns each against 4 ns for
+//!   exhaustive search's, the pyramid load being the hottest instruction (cache misses: the
+//!   learnt order visits cells anywhere in the voxel arrays), and sorts (cell plans, hints)
+//!   took a fifth of the time. Cells are now looked up in tiers of expected decrease, index
+//!   order within a tier (`ORDER_TIERS`), plans are re-sorted less often and built when a
+//!   level is first reached, hints keep their lookup order, and the bound store's memory is
+//!   reused across the searches of a match: the search makes more lookups (59.9 lattice
+//!   poses per evaluation on the exactness test's 100 cases) in less time.
 //! - Local cells over unknown parts of the global map score a neutral constant instead of the
 //!   outlier density: the paper's choice biases matches towards maximum overlap (measured: 10-20
 //!   cm downrange bias between consecutive stereo views).
@@ -513,6 +522,16 @@ impl BoundStore {
         Self { values, sums: vec![sum], free: Vec::new(), n: trivial.len() }
     }
 
+    /// Empties the store down to the trivial bounds, keeping its memory.
+    fn reset(&mut self, trivial: &[f64]) {
+        self.values.clear();
+        self.values.extend(trivial.iter().map(|&t| round_up_f32(t)));
+        self.sums.clear();
+        self.sums.push(self.values.iter().map(|&v| f64::from(v)).sum());
+        self.free.clear();
+        self.n = trivial.len();
+    }
+
     /// The bounds kept in `slot` (the trivial ones for `NO_SLOT`).
     fn get(&self, slot: u32) -> Inherited<'_> {
         let slot = if slot == NO_SLOT { ROOT_SLOT } else { slot };
@@ -685,8 +704,17 @@ const PRIOR_LOOKUPS: f32 = 4.0;
 
 /// Lookups, in local cells' worth, between re-sorts of a level's cell order. Measured on 30
 /// of the `rovernav eval localization` cases: 57.8 lattice poses per evaluation at 2, 57.1 at
-/// 4, 54.4 at 16; at 2 the sorts took 13 % of the bench's match time (39 000 local cells).
-const RESORT_EVERY: usize = 4;
+/// 4, 54.4 at 16; at 2 the sorts took 13 % of the bench's match time (39 000 local cells). In
+/// wall time on the localisation workload (`benchmark::localisation_workload`, CPU seconds
+/// per match with `ORDER_TIERS` = 4): 0.30 s at 16, 0.25 s at 64, with the same lookups.
+const RESORT_EVERY: usize = 64;
+
+/// Tiers of a level's cell order (by expected decrease) within which cells are looked up in
+/// index order. Lookups in the learnt order land anywhere in the voxel arrays (tens of MB)
+/// and miss the cache: the pyramid load was the hottest instruction of the profile. Measured
+/// on the localisation workload (CPU s per match, lookups in poses' worth): learnt order 0.32
+/// s (177), one tier 0.26 s (217), four tiers 0.25 s (200).
+const ORDER_TIERS: usize = 4;
 
 impl CellPlan {
     /// Expected decrease per lookup of cell `i`.
@@ -719,6 +747,12 @@ impl CellPlan {
             *slot = i as usize;
         }
         self.active = self.order.iter().take_while(|&&i| rates[i] >= self.min_rate).count();
+        // Within each tier of expected decrease, cells in index order (the local map's row
+        // order), so that consecutive lookups land near each other in the voxel arrays.
+        let tier = self.active.div_ceil(ORDER_TIERS).max(1);
+        for chunk in self.order[..self.active].chunks_mut(tier) {
+            chunk.sort_unstable();
+        }
         self.since_sort = 0;
     }
 }
@@ -819,6 +853,9 @@ pub struct Scorer<'a, S: DistanceScore> {
     /// Distance-transform lookups made so far (one per local cell per pose scored or box
     /// bounded; none for a cell whose bound is inherited or trivial).
     lookups: u64,
+    /// The per-cell bound store of the last search, kept so that the next search (the failure
+    /// search runs several) reuses its memory instead of faulting in fresh pages.
+    spare_store: Option<BoundStore>,
     _score: std::marker::PhantomData<&'a S>,
 }
 
@@ -861,17 +898,16 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             in_hint: vec![0; cells.len()],
             hint_generation: 0,
             lookups: 0,
+            spare_store: None,
             _score: std::marker::PhantomData,
         };
         scorer.plan_cells();
         scorer
     }
 
-    /// Sets the trivial bounds from the current neutral scores and starts each level's cell
-    /// plan from its prior (forgetting what was learnt).
+    /// Sets the trivial bounds from the current neutral scores and forgets the cell plans
+    /// learnt (they restart from their priors at the next box bound).
     fn plan_cells(&mut self) {
-        let v = self.voxels;
-        let plane = v.rows * v.cols;
         let best_anywhere = self.exact[0];
         self.trivial = self.neutral.iter().map(|n| best_anywhere.max(*n)).collect();
         self.trivial_all = self.trivial.iter().sum();
@@ -885,33 +921,41 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 trivial: self.trivial[i],
             })
             .collect();
-        let miss = best_anywhere - self.exact[1.min(self.exact.len() - 1)];
-        let n = self.cells.len();
-        self.plans = v
-            .nonzero_fraction
-            .iter()
-            .enumerate()
-            .map(|(level, fractions)| {
-                let prior = (0..n)
-                    .map(|i| {
-                        let f = self.cells.layer_offset[i].map_or(1.0, |offset| fractions[offset / plane]);
-                        (f64::from(f) * miss) as f32
-                    })
-                    .collect();
-                let mut plan = CellPlan {
-                    order: (0..n).collect(),
-                    active: 0,
-                    tally: vec![[0.0; 2]; n],
-                    prior,
-                    since_sort: 0,
-                    min_rate: (min_rate_units(level) * miss) as f32,
-                };
-                plan.sort();
-                plan
-            })
-            .collect();
+        self.plans.clear();
         self.hints.clear();
         self.hint_entries = 0;
+    }
+
+    /// Starts each level's cell plan from its prior, when the first box is bounded (a
+    /// scorer's neutral scores may change before).
+    fn build_plans(&mut self) {
+        self.plans = vec![CellPlan::default(); self.voxels.nonzero_fraction.len()];
+    }
+
+    /// The cell plan of one pyramid level, from its prior.
+    fn build_plan(&self, level: usize) -> CellPlan {
+        let v = self.voxels;
+        let plane = v.rows * v.cols;
+        let best_anywhere = self.exact[0];
+        let miss = best_anywhere - self.exact[1.min(self.exact.len() - 1)];
+        let n = self.cells.len();
+        let fractions = &v.nonzero_fraction[level];
+        let prior = (0..n)
+            .map(|i| {
+                let f = self.cells.layer_offset[i].map_or(1.0, |offset| fractions[offset / plane]);
+                (f64::from(f) * miss) as f32
+            })
+            .collect();
+        let mut plan = CellPlan {
+            order: (0..n).collect(),
+            active: 0,
+            tally: vec![[0.0; 2]; n],
+            prior,
+            since_sort: 0,
+            min_rate: (min_rate_units(level) * miss) as f32,
+        };
+        plan.sort();
+        plan
     }
 
     /// The pose lattice.
@@ -1142,15 +1186,23 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             // No pyramid level this coarse: only the parent's bound.
             return sum;
         }
+        if self.plans.is_empty() {
+            self.build_plans();
+        }
         let mut plan = std::mem::take(&mut self.plans[level as usize]);
+        if plan.order.len() != n {
+            // Each level's plan is built when the search first reaches the level.
+            plan = self.build_plan(level as usize);
+        }
         if plan.since_sort >= RESORT_EVERY * n {
             plan.sort();
         }
         let k_center = k_lo + (k_hi - k_lo) / 2;
         let hinted = k_lo == k_hi && NEIGHBOUR_HINT_LEVELS.contains(&level);
-        // The hint's cells that were worth their lookup at the neighbouring heading, largest
-        // decrease first, then the plan's cells the hint did not look up (the others were not
-        // worth it there).
+        // The hint's cells that were worth their lookup at the neighbouring heading, in the
+        // order it looked them up (by tiers of expected decrease, index order within a tier;
+        // sorting them by their decrease there cost more time than its earlier exits saved),
+        // then the plan's cells the hint did not look up (the others were not worth it there).
         let mut tightened: Vec<(u32, f32)> = Vec::new();
         self.hint_generation = self.hint_generation.wrapping_add(1);
         let generation = self.hint_generation;
@@ -1162,7 +1214,6 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             {
                 use_hint = true;
                 tightened.extend(hint.iter().copied().filter(|&(_, decrease)| decrease >= plan.min_rate));
-                tightened.sort_unstable_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
                 for &(i, _) in hint {
                     self.in_hint[i as usize] = generation;
                 }
@@ -1327,7 +1378,13 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         let root_level = 2 * span.next_power_of_two().trailing_zeros();
         let mut heap: BinaryHeap<PoseCell> = BinaryHeap::new();
         // Per-cell bounds of the queued boxes, `n` per slot, and the free slots.
-        let mut store = BoundStore::new(&self.trivial);
+        let mut store = match self.spare_store.take() {
+            Some(mut store) => {
+                store.reset(&self.trivial);
+                store
+            }
+            None => BoundStore::new(&self.trivial),
+        };
         let mut changes = Vec::new();
         let mut next: Option<PoseCell> = None;
         if root_lo != half {
@@ -1401,6 +1458,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
                 heap.push(other);
             }
         }
+        self.spare_store = Some(store);
         out.evaluations = (self.lookups - lookups_before).div_ceil(n.max(1) as u64);
         out
     }
@@ -1565,6 +1623,41 @@ pub fn run_match<S: DistanceScore>(
     analysis: &PeakAnalysis,
     exhaustive: bool,
 ) -> MatchDetails {
+    let peak = find_peak(scorer, analysis, exhaustive);
+    finish_match(scorer, analysis, &peak)
+}
+
+/// The main search and the peak fit of a match, before its failure search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Peak {
+    /// The main search's outcome.
+    pub main: SearchOutcome,
+    /// Lattice index of the best pose.
+    pub best: [i32; 3],
+    /// The lattice searched.
+    pub lattice: PoseLattice,
+    /// Subpixel offset of the fitted peak (lattice units).
+    pub offset: [f64; 3],
+    /// Covariance of the fit (lattice units).
+    pub cov_lattice: Matrix3<f64>,
+    /// Whether the fit was a proper maximum.
+    pub peak_fit_ok: bool,
+}
+
+impl Peak {
+    /// The estimated (subpixel) pose.
+    pub fn pose(&self) -> Pose2 {
+        self.lattice.pose([0, 1, 2].map(|a| f64::from(self.best[a]) + self.offset[a]))
+    }
+}
+
+/// Runs the main search (branch and bound from the dead-reckoned pose, or exhaustive) and fits
+/// the peak; [`finish_match`] adds the failure search.
+pub fn find_peak<S: DistanceScore>(
+    scorer: &mut Scorer<'_, S>,
+    analysis: &PeakAnalysis,
+    exhaustive: bool,
+) -> Peak {
     let main = if exhaustive {
         scorer.exhaustive()
     } else {
@@ -1574,7 +1667,6 @@ pub fn run_match<S: DistanceScore>(
     let lattice = scorer.lattice();
     let temperature = analysis.temperature.max(1e-12);
     let fit = scorer.fit_peak(best, analysis.fit_radius, temperature);
-    let steps = [lattice.step, lattice.step, lattice.yaw_step];
     let (offset, cov_lattice, peak_fit_ok) = match fit {
         Some((o, c)) => (o, c, true),
         None => {
@@ -1583,6 +1675,19 @@ pub fn run_match<S: DistanceScore>(
             ([0.0; 3], Matrix3::from_diagonal(&Vector3::new(w[0], w[1], w[2])), false)
         }
     };
+    Peak { main, best, lattice, offset, cov_lattice, peak_fit_ok }
+}
+
+/// Completes a match from its peak: the covariance, and the failure search for competing
+/// peaks.
+pub fn finish_match<S: DistanceScore>(
+    scorer: &mut Scorer<'_, S>,
+    analysis: &PeakAnalysis,
+    peak: &Peak,
+) -> MatchDetails {
+    let Peak { main, best, lattice, cov_lattice, peak_fit_ok, .. } = *peak;
+    let temperature = analysis.temperature.max(1e-12);
+    let steps = [lattice.step, lattice.step, lattice.yaw_step];
     let mut covariance = [[0.0; 3]; 3];
     for (r, row) in covariance.iter_mut().enumerate() {
         for (c, v) in row.iter_mut().enumerate() {
@@ -1610,8 +1715,8 @@ pub fn run_match<S: DistanceScore>(
     let mut runner_up = None;
     let mut failure_search_evaluations = 0;
     while peaks.len() <= analysis.max_competitors {
-        let peak = peaks[peaks.len() - 1];
-        excluded.push(([0, 1, 2].map(|a| peak[a] - exclusion[a]), [0, 1, 2].map(|a| peak[a] + exclusion[a])));
+        let last = peaks[peaks.len() - 1];
+        excluded.push(([0, 1, 2].map(|a| last[a] - exclusion[a]), [0, 1, 2].map(|a| last[a] + exclusion[a])));
         let competitor = scorer.branch_and_bound(threshold, None, &excluded);
         failure_search_evaluations += competitor.evaluations;
         let Some(found) = competitor.best else {
@@ -1629,10 +1734,9 @@ pub fn run_match<S: DistanceScore>(
     if !peak_fit_ok {
         failure_probability = failure_probability.max(0.5);
     }
-    let u = [0, 1, 2].map(|a| f64::from(best[a]) + offset[a]);
     MatchDetails {
         result: MatchResult {
-            pose: lattice.pose(u),
+            pose: peak.pose(),
             covariance,
             log_likelihood: main.score,
             failure_probability,

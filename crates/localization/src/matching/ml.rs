@@ -13,7 +13,7 @@ use rovernav_core::Grid2;
 use super::elevation::{fill_gaps, high_pass};
 use super::engine::{
     BoundKind, DistanceScore, LocalCells, MatchDetails, PeakAnalysis, PoseLattice, Scorer, SearchOutcome,
-    SplitRule, VoxelMap, run_match,
+    SplitRule, VoxelMap, find_peak, finish_match, run_match,
 };
 use super::{MatchError, MatchResult, SearchWindow};
 
@@ -214,22 +214,61 @@ impl MlMatcher {
         window: &SearchWindow,
         exhaustive: bool,
     ) -> Result<MatchDetails, MatchError> {
-        let first = self.match_detailed_at(local, window, exhaustive, window.center)?;
         if self.params.overlap_margin_cells.is_none() {
-            return Ok(first);
+            return self.match_detailed_at(local, window, exhaustive, window.center);
         }
-        let p = first.result.pose;
-        let step = first.lattice.step;
-        let moved = (p.x - window.center.x).hypot(p.y - window.center.y) > step
-            || (p.yaw - window.center.yaw).abs() > first.lattice.yaw_step;
-        if !moved {
-            return Ok(first);
+        let r = local.resolution();
+        if !(r > 0.0 && r.is_finite()) {
+            return Err(MatchError::BadResolution { map: "local", value: r });
         }
-        let second = self.match_detailed_at(local, window, exhaustive, p)?;
-        // Both runs report their work: the second is the answer, the first found its cells.
-        let mut out = second;
-        out.result.poses_evaluated += first.result.poses_evaluated;
-        Ok(out)
+        window.validate()?;
+        let analysis = self.analysis();
+        let filtered = self.filtered(local);
+        let at_centre = self.masked(&filtered, window.center);
+        // The first run's failure search is only needed when its answer stands: when the
+        // match did not move, or moved to where the same local cells are chosen (the second
+        // run would repeat the first exactly).
+        let first = self.with_scorer_on(&at_centre, window, |scorer| {
+            let peak = find_peak(scorer, &analysis, exhaustive);
+            let p = peak.pose();
+            let moved = (p.x - window.center.x).hypot(p.y - window.center.y) > peak.lattice.step
+                || (p.yaw - window.center.yaw).abs() > peak.lattice.yaw_step;
+            if !moved {
+                return Ok(finish_match(scorer, &analysis, &peak));
+            }
+            let at_peak = self.masked(&filtered, p);
+            let same = at_peak.data.iter().zip(&at_centre.data).all(|(a, b)| a.to_bits() == b.to_bits());
+            if same {
+                Ok(finish_match(scorer, &analysis, &peak))
+            } else {
+                Err((at_peak, peak.main.evaluations))
+            }
+        })?;
+        match first {
+            Ok(details) => Ok(details),
+            Err((at_peak, first_evaluations)) => {
+                let mut out =
+                    self.with_scorer_on(&at_peak, window, |scorer| run_match(scorer, &analysis, exhaustive))?;
+                // Both runs report their work: the second is the answer, the first found its
+                // cells.
+                out.result.poses_evaluated += first_evaluations;
+                Ok(out)
+            }
+        }
+    }
+
+    /// The peak analysis of a match.
+    fn analysis(&self) -> PeakAnalysis {
+        PeakAnalysis {
+            temperature: self.params.temperature,
+            failure_margin: self.params.failure_margin,
+            min_exclusion: 3,
+            // The likelihood of sparse stereo views is skewed away from its peak: a normal
+            // fitted to +-2 steps followed the skew (measured on the simulator's mast stereo
+            // sequence: 4.2 cm mean downrange error, 3.5 cm with +-1 step).
+            fit_radius: 1,
+            max_competitors: 4,
+        }
     }
 
     /// One match with the local cells chosen at `overlap_pose`.
@@ -244,16 +283,7 @@ impl MlMatcher {
         if !(r > 0.0 && r.is_finite()) {
             return Err(MatchError::BadResolution { map: "local", value: r });
         }
-        let analysis = PeakAnalysis {
-            temperature: self.params.temperature,
-            failure_margin: self.params.failure_margin,
-            min_exclusion: 3,
-            // The likelihood of sparse stereo views is skewed away from its peak: a normal
-            // fitted to +-2 steps followed the skew (measured on the simulator's mast stereo
-            // sequence: 4.2 cm mean downrange error, 3.5 cm with +-1 step).
-            fit_radius: 1,
-            max_competitors: 4,
-        };
+        let analysis = self.analysis();
         self.with_scorer(local, window, overlap_pose, |scorer| run_match(scorer, &analysis, exhaustive))
     }
 
@@ -285,15 +315,36 @@ impl MlMatcher {
         f: impl FnOnce(&mut Scorer<'_, MixtureLikelihood>) -> R,
     ) -> Result<R, MatchError> {
         window.validate()?;
+        let masked = self.masked(&self.filtered(local), overlap_pose);
+        self.with_scorer_on(&masked, window, f)
+    }
+
+    /// The local map with its gaps filled and high-passed, as the matcher scores it.
+    fn filtered(&self, local: &Grid2<f32>) -> Grid2<f32> {
         let filled = fill_gaps(local, self.params.fill_gaps_cells);
-        let mut filtered = match self.params.high_pass_window {
+        match self.params.high_pass_window {
             Some(w) => high_pass(&filled, w),
             None => filled,
-        };
-        if let Some(margin) = self.params.overlap_margin_cells {
-            filtered = self.overlap_only(filtered, overlap_pose, margin);
         }
-        let cells = LocalCells::new(&filtered, &self.voxels, self.params.max_local_cells)?;
+    }
+
+    /// A filtered local map masked to its overlap with known global terrain at `pose` (see
+    /// [`MlParams::overlap_margin_cells`]).
+    fn masked(&self, filtered: &Grid2<f32>, pose: rovernav_core::Pose2) -> Grid2<f32> {
+        match self.params.overlap_margin_cells {
+            Some(margin) => self.overlap_only(filtered.clone(), pose, margin),
+            None => filtered.clone(),
+        }
+    }
+
+    /// Hands a scorer over a filtered and masked local map to `f`.
+    fn with_scorer_on<R>(
+        &self,
+        filtered: &Grid2<f32>,
+        window: &SearchWindow,
+        f: impl FnOnce(&mut Scorer<'_, MixtureLikelihood>) -> R,
+    ) -> Result<R, MatchError> {
+        let cells = LocalCells::new(filtered, &self.voxels, self.params.max_local_cells)?;
         let mut scorer = Scorer::new(
             &self.voxels,
             &cells,
