@@ -8,6 +8,7 @@
 
 pub mod camera;
 pub mod codec;
+pub mod descent;
 pub mod image;
 pub mod lander;
 pub mod rectify;

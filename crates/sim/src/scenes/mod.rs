@@ -12,6 +12,7 @@
 //! their albedo, as the generators ensure).
 
 pub mod clouds;
+pub mod descent;
 pub mod dust_devils;
 pub mod lander;
 
