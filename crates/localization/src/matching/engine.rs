@@ -806,6 +806,9 @@ struct HotCell {
     trivial: f64,
 }
 
+/// Most cached rotated cell positions (`Scorer::rotated`, 8 bytes each: 64 MB).
+const MAX_ROTATED: usize = 1 << 23;
+
 /// A box of one heading by (pyramid level, block corner x, y, heading).
 type HintKey = (u32, i32, i32, i32);
 
@@ -834,6 +837,12 @@ pub struct Scorer<'a, S: DistanceScore> {
     trivial_all: f64,
     /// Per local cell: what box bounds read of it.
     hot: Vec<HotCell>,
+    /// Per heading (`k + half[2]`): each local cell's voxel column and row at translation
+    /// (0, 0), rotated once when a box bound first needs the heading (`None`: not yet, or
+    /// beyond `MAX_ROTATED` or `i32`); lattice translations add whole voxels to it.
+    rotated: Vec<Option<Vec<[i32; 2]>>>,
+    /// Entries held in `rotated`.
+    rotated_entries: usize,
     /// How cells are bounded.
     bound_kind: BoundKind,
     /// How cells are split.
@@ -890,6 +899,8 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             trivial: Vec::new(),
             trivial_all: 0.0,
             hot: Vec::new(),
+            rotated: Vec::new(),
+            rotated_entries: 0,
             bound_kind,
             split,
             plans: Vec::new(),
@@ -1198,6 +1209,7 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             plan.sort();
         }
         let k_center = k_lo + (k_hi - k_lo) / 2;
+        let cached = self.rotated_cells(k_center);
         let hinted = k_lo == k_hi && NEIGHBOUR_HINT_LEVELS.contains(&level);
         // The hint's cells that were worth their lookup at the neighbouring heading, in the
         // order it looked them up (by tiers of expected decrease, index order within a tier;
@@ -1237,6 +1249,9 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
         let (cols, rows) = (v.cols as i64, v.rows as i64);
         let half_diagonal = 0.5 * (wx as f64).hypot(wy as f64);
         let place = self.placement([lo[0], lo[1], k_center]);
+        let rotated =
+            cached.then(|| self.rotated[(k_center + self.lattice.half[2]) as usize].as_deref()).flatten();
+        let shift = [i64::from(lo[0]), i64::from(lo[1])];
         let mut looked = 0u64;
         for i in cells {
             if sum <= threshold {
@@ -1250,7 +1265,10 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             }
             looked += 1;
             plan.tally[i][0] += 1.0;
-            let (col, row) = place.voxel(c.x, c.y);
+            let (col, row) = match rotated {
+                Some(r) => (i64::from(r[i][0]) + shift[0], i64::from(r[i][1]) + shift[1]),
+                None => place.voxel(c.x, c.y),
+            };
             let inside = col >= 0 && row >= 0 && col + wx as i64 <= cols && row + wy as i64 <= rows;
             if !inside {
                 continue;
@@ -1305,6 +1323,38 @@ impl<'a, S: DistanceScore> Scorer<'a, S> {
             }
         }
         sum
+    }
+
+    /// Rotates the local cells to heading `k` once (see `Scorer::rotated`); whether they are
+    /// cached.
+    fn rotated_cells(&mut self, k: i32) -> bool {
+        let headings = 2 * self.lattice.half[2] as usize + 1;
+        if self.rotated.len() != headings {
+            self.rotated = vec![None; headings];
+            self.rotated_entries = 0;
+        }
+        let slot = (k + self.lattice.half[2]) as usize;
+        if self.rotated[slot].is_some() {
+            return true;
+        }
+        let n = self.cells.len();
+        if self.rotated_entries + n > MAX_ROTATED {
+            return false;
+        }
+        let place = self.placement([0, 0, k]);
+        let fits = |v: i64| i32::try_from(v).ok();
+        let cells: Option<Vec<[i32; 2]>> = self
+            .hot
+            .iter()
+            .map(|c| {
+                let (col, row) = place.voxel(c.x, c.y);
+                Some([fits(col)?, fits(row)?])
+            })
+            .collect();
+        let Some(cells) = cells else { return false };
+        self.rotated_entries += n;
+        self.rotated[slot] = Some(cells);
+        true
     }
 
     /// Bound of one box of the search tree from its parent's per-cell bounds, pushing the
