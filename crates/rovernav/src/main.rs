@@ -319,6 +319,10 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
     log.close(output.is_ok())?;
     let output = output?;
     output::write_run_outputs(&out_dir, &output)?;
+    if output.report.tasks.iter().any(|t| t.placement.is_some()) {
+        let placements = rovernav_telemetry::read_log(&out_dir.join("telemetry.mcap"))?.placements;
+        output::write_placement_pictures(&out_dir, &placements, &output.world.rover)?;
+    }
     let report = &output.report;
     if args.json {
         println!("{}", serde_json::to_string_pretty(report)?);

@@ -40,6 +40,24 @@ pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) 
     })
 }
 
+/// Writes `placement-<task>.png` into `dir` for every instrument placement (AutoPlace) of a run,
+/// read back from its telemetry log (`rovernav run` and `rovernav replay` draw the same).
+pub fn write_placement_pictures(
+    dir: &Path,
+    placements: &[rovernav_executive::arm_server::PlacementMsg],
+    rover: &rovernav_core::RoverConfig,
+) -> anyhow::Result<()> {
+    let arm = rovernav_manipulation::Arm::new(rover);
+    for p in placements {
+        let png = rovernav_viz::placement::placement_png(p, &arm)?;
+        write_atomic(&dir.join(format!("placement-{}.png", p.task)), |b| {
+            b.extend_from_slice(&png);
+            Ok(())
+        })?;
+    }
+    Ok(())
+}
+
 /// A run's `telemetry.mcap`, opened before the run so every cycle is logged as it happens.
 ///
 /// A run that fails before logging anything (an unknown navigator, a missing DEM) leaves no

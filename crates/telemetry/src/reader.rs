@@ -52,6 +52,8 @@ pub struct LoggedRun {
     pub overlays: Option<OverlaysMsg>,
     /// `/executive/report`.
     pub report: Option<Report>,
+    /// `/bus/arm/placement`: every instrument placement the tooling arm decided.
+    pub placements: Vec<rovernav_executive::arm_server::PlacementMsg>,
     /// Messages per topic (unknown topics included: they are counted and skipped).
     pub topic_counts: BTreeMap<String, u64>,
     /// How far reading got.
@@ -100,6 +102,7 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
             topics::CYCLE => run.cycles.push(decode(data).map_err(decode_err)?),
             topics::OVERLAYS => run.overlays = Some(decode(data).map_err(decode_err)?),
             topics::REPORT => run.report = Some(decode(data).map_err(decode_err)?),
+            topics::ARM_PLACEMENT => run.placements.push(decode(data).map_err(decode_err)?),
             _ => {}
         }
     }

@@ -1,9 +1,11 @@
 //! Pictures of traverses: shaded terrain, rocks and hazards, sensed area, planned and driven
-//! paths, start, goal and a scale bar, written as PNG.
+//! paths, start, goal and a scale bar, written as PNG; and of instrument placements
+//! ([`placement`]).
 //!
 //! A tiny software rasteriser is enough here and keeps image crates (and their build time) out.
 
 mod canvas;
+pub mod placement;
 
 pub use canvas::{Canvas, Rgb};
 

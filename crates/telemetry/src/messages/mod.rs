@@ -41,6 +41,8 @@ pub mod topics {
     pub const REPORT: &str = "/executive/report";
     /// The navigator's drawings at the end of the run.
     pub const OVERLAYS: &str = "/navigation/overlays";
+    /// Each instrument placement, as the tooling arm published it on the bus (AutoPlace).
+    pub const ARM_PLACEMENT: &str = "/bus/arm/placement";
     /// Every topic a run logs, in the order they are first written.
     pub const ALL: [&str; 11] = [
         WORLD,
