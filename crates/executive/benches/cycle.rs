@@ -1,6 +1,9 @@
 //! Compute per navigation cycle on the default mission (release: `cargo bench -p
 //! rovernav-executive --bench cycle`).
 //!
+//! First, every registered navigator's compute per cycle by stage (navigation, localisation,
+//! platform) against the flight-like budget (10 ms, RoverBug 30 ms; issue 43).
+//!
 //! `components`: one cycle of the full run (the deliberative layer, the runtime stepping the
 //! component graph on the bus, the loop's trace), timed by an observer from the start of the
 //! loop to the last executed command of whole traverses (so without assembling the run and
@@ -83,7 +86,32 @@ fn per_cycle(iters: u64, mut traverse: impl FnMut() -> (Duration, u64)) -> Durat
     spent.mul_f64(iters as f64 / cycles as f64)
 }
 
+/// Compute per cycle by stage for every registered navigator on the default mission, against
+/// the flight-like budget (10 ms; RoverBug 30 ms), from each run's `compute_per_cycle`.
+fn print_stages() {
+    for name in rovernav_navigation::navigator_names() {
+        let mut mission = Mission::default_mission();
+        mission.navigator = name.into();
+        let Ok(run) = Run::mission(&mission, "default").and_then(Run::execute) else {
+            eprintln!("{name:<22} did not run");
+            continue;
+        };
+        let t = &run.report.compute_per_cycle;
+        let budget = if name == "roverbug" { 30.0 } else { 10.0 };
+        eprintln!(
+            "{name:<22} {:>4} cycles  navigation {:7.3} ms  localisation {:6.3} ms  platform {:6.3} ms  \
+             (budget {budget} ms: {:.1}x margin)",
+            run.report.cycles,
+            t.navigation_s * 1e3,
+            t.localization_s * 1e3,
+            t.platform_s * 1e3,
+            budget / ((t.navigation_s + t.localization_s) * 1e3).max(1e-9)
+        );
+    }
+}
+
 fn cycle(c: &mut Criterion) {
+    print_stages();
     let mission = Mission::default_mission();
     let world = build_world(&mission, "default").expect("the default world builds");
     let options = RunOptions::of(&mission, &world);

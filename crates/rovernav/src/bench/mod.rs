@@ -1,6 +1,11 @@
-//! `rovernav bench`: planner benchmarks on the MovingAI scenarios and on cost maps. A thin
+//! `rovernav bench`: planner benchmarks on the MovingAI scenarios and on cost maps, a thin
 //! command-line layer (file reading, argument parsing, printing) over
-//! [`rovernav_planning::benchmark`], where the logic lives and is tested.
+//! [`rovernav_planning::benchmark`], where the logic lives and is tested; and `bench report`,
+//! every hot path against a baseline timed in the same process ([`report`], [`workloads`]).
+
+mod edt;
+mod report;
+mod workloads;
 
 use anyhow::{Context, anyhow};
 use rovernav_planning::benchmark::{
@@ -44,6 +49,25 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Time every hot path against the baseline a user would otherwise pick, both in this
+    /// process (A*/Dijkstra vs the pathfinding crate, Field D*, D* Lite replanning, the map
+    /// matcher vs exhaustive search, the EDT, the navigation cycle, the simulator), and write
+    /// the table with the command and git revision (to docs/results/performance.md unless
+    /// --write says where, or --no-write). Needs the data directory (ROVERNAV_DATA).
+    Report {
+        /// The quick versions (fewer repetitions and cases; about a minute in release).
+        #[arg(long)]
+        quick: bool,
+        /// Print the rows as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Where to write the Markdown table.
+        #[arg(long, default_value = "docs/results/performance.md")]
+        write: PathBuf,
+        /// Do not write the table anywhere.
+        #[arg(long)]
+        no_write: bool,
+    },
 }
 
 /// Runs a bench subcommand, printing its results to stdout.
@@ -79,6 +103,46 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
                 run_grid_events(&grid, start, goal, &planner).map_err(|e| anyhow!("{}: {e}", label(&map)))?;
             print_grid(&report, &label(&map), json);
         }
+        BenchCommand::Report { quick, json, write, no_write } => {
+            run_report(quick, json, (!no_write).then_some(write))?
+        }
+    }
+    Ok(())
+}
+
+/// Runs every workload of `bench report` (progress on stderr), prints and writes the table.
+fn run_report(quick: bool, json: bool, write: Option<PathBuf>) -> anyhow::Result<()> {
+    let reps = if quick { 2 } else { 5 };
+    let mut rows = Vec::new();
+    let step = |name: &str| eprintln!("bench report: {name}");
+    step("map1000 planners");
+    let map1000 = workloads::cost_map("map1000")?;
+    rows.extend(workloads::graph_search(&map1000, reps)?);
+    rows.push(workloads::field_dstar(&map1000, if quick { 1 } else { 3 })?);
+    rows.push(workloads::dstar_lite_replan(&map1000, reps)?);
+    step("matcher, localisation workload");
+    rows.push(workloads::matcher_localisation(quick)?);
+    step("distance transforms");
+    rows.push(workloads::edt(quick)?);
+    step("matcher, scan-matcher window");
+    rows.push(workloads::matcher_scan_window(quick)?);
+    step("default mission");
+    rows.extend(workloads::mission_rows(quick)?);
+    let command =
+        std::iter::once("rovernav".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
+    let report = report::Report { command, revision: report::git_revision(), quick, rows };
+    if let Some(path) = write {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+        }
+        std::fs::write(&path, report::markdown(&report))
+            .with_context(|| format!("{}: cannot write", label(&path)))?;
+        eprintln!("bench report: table written to {}", label(&path));
+    }
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print!("{}", report::text(&report));
     }
     Ok(())
 }
