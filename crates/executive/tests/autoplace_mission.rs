@@ -11,7 +11,9 @@ mod common;
 
 use rovernav_core::Pose3;
 use rovernav_executive::arm_server::PlacementMsg;
-use rovernav_executive::{Mission, Run, RunObserver, RunOptions, RunOutput, RunSettings, build_world};
+use rovernav_executive::{
+    Mission, Run, RunObserver, RunOptions, RunOutput, RunSettings, ScriptedOperator, build_world,
+};
 use rovernav_manipulation::Arm;
 use rovernav_manipulation::execution::execute;
 use rovernav_manipulation::feasibility::Plan;
@@ -186,4 +188,27 @@ fn a_rock_hidden_behind_a_boulder_in_the_arms_path_is_refused_and_nothing_moves(
     let inside = |c: &[f32; 4]| (0..3).all(|k| (body[k] - c[k] as f64).abs() <= 0.5 * c[3] as f64);
     assert!(p.octree.unknown.iter().any(inside), "the hidden rock's top {body:?} is unknown");
     assert!(!p.octree.occupied.iter().any(inside));
+}
+
+#[test]
+fn the_operators_place_command_queues_a_placement_that_runs_end_to_end() {
+    // The example mission without its task: the operator asks for the placement instead.
+    let file = include_str!("../../../missions/place_instrument.toml");
+    let text = file.split("[[tasks]]").next().unwrap();
+    let m = Mission::from_toml(text, "place_instrument.toml").expect("the example mission parses");
+    let world = build_world(&m, "test").unwrap();
+    let options = RunOptions::of(&m, &world);
+    let mut op = ScriptedOperator::new(&[(0, "place 7.61 3.68"), (0, "place 7.61 nan")]);
+    let out = Run::new(world, RunSettings::of(&m)).options(options).operator(&mut op).execute().unwrap();
+    assert!(op.reply_containing("task 2 added: place_instrument (7.61, 3.68)").is_some());
+    assert!(op.reply_containing("error: token 3 \"nan\"").is_some(), "a NaN is refused at the edge");
+    let place = out.report.tasks.iter().find(|t| t.kind == "place_instrument").expect("queued");
+    let summary = place.placement.as_ref().expect("AutoPlace ran");
+    assert_eq!((place.state.as_str(), summary.outcome.as_str()), ("success", "placed"), "{}", place.message);
+    // On the rock's top: the rock (26 cm across) rises above the ground around it.
+    let t = summary.target.unwrap();
+    assert!((t[0] - 7.61).hypot(t[1] - 3.68) < 0.1, "{t:?}");
+    let dem = &out.world.terrain.dem;
+    assert!(dem.height(t[0], t[1]).unwrap() > dem.height(7.61 - 0.3, 3.68).unwrap() + 0.05);
+    assert_eq!(out.report.outcome, "reached", "{}", out.report.message);
 }
