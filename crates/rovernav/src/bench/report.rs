@@ -163,6 +163,29 @@ pub fn markdown(report: &Report) -> String {
             r.limits
         );
     }
+    if let Some(navigators) =
+        report.rows.iter().find_map(|r| r.details.get("navigators")).and_then(|n| n.as_object())
+    {
+        out +=
+            "\nCompute per cycle by stage on the default mission (ms; the report's `compute_per_cycle`):\n\n";
+        out +=
+            "| navigator | outcome | cycles | navigation | localisation | platform (simulator) | budget |\n";
+        out += "|---|---|---|---|---|---|---|\n";
+        for (name, v) in navigators {
+            let ms = |k: &str| {
+                v.get(k).and_then(|x| x.as_f64()).map_or_else(|| "-".into(), |x| format!("{:.2}", x * 1e3))
+            };
+            out += &format!(
+                "| {name} | {} | {} | {} | {} | {} | {} |\n",
+                v.get("outcome").and_then(|x| x.as_str()).unwrap_or("-"),
+                v.get("cycles").map_or_else(|| "-".into(), |x| x.to_string()),
+                ms("navigation_s"),
+                ms("localization_s"),
+                ms("platform_s"),
+                ms("budget_s")
+            );
+        }
+    }
     out += "\nDetails per row (JSON, as `--json` prints them):\n\n";
     for r in &report.rows {
         out += &format!("- `{}`: `{}`\n", r.workload, r.details);

@@ -365,7 +365,7 @@ pub fn mission_rows(quick: bool) -> anyhow::Result<Vec<Row>> {
         "whole default mission, wall clock",
         "real time: the simulated rover's own clock",
         (r.wall_time_s, r.sim_time_s),
-        "rendering the sensors' rays (platform time per cycle) and the navigator between drives",
+        "the run's truth set-up (the true hazard grid for the optimal-path reference, about 45 % of the run), the navigator and the PNG output; the simulator steps in under 1 ms per cycle",
     )
     .details(json!({
         "distance_m": r.distance_driven_m,
