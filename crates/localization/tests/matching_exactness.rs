@@ -119,7 +119,7 @@ fn ml_branch_and_bound_equals_exhaustive_search_on_rover_sized_cases() {
 
 /// The 100 cases (about 100 s in the dev profile, 35 s in release): run with
 /// `cargo test --release -p rovernav-localization --test matching_exactness -- --ignored`.
-/// Measured here (13 m global maps): 100/100 exact, 741x fewer single poses, 59.9x fewer
+/// Measured here (13 m global maps): 100/100 exact, 741x fewer single poses, 59.8x fewer
 /// evaluations in all (69.4x before cells were looked up in tiers of index order, which costs
 /// lookups but saves wall time, see `engine::ORDER_TIERS`); `rovernav eval localization` (20 m global maps): 100/100 exact, 704x
 /// fewer single poses, 62.5x fewer evaluations (23.2x before per-cell bound inheritance,
