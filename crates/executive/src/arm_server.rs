@@ -403,3 +403,53 @@ impl Component for ToolingArm {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::messages::FrameSource;
+    use rovernav_core::SensorFrame;
+
+    #[test]
+    fn a_placement_images_first_and_a_refusal_holds_nothing_and_fails_the_task() {
+        let mut bus = Bus::in_process();
+        let mut arm = ToolingArm::new(ArmConfig::default());
+        arm.connect(&mut bus).unwrap();
+        let motion = bus.subscribe(topics::EXECUTIVE_MOTION).unwrap();
+        let holds = bus.subscribe(topics::PLATFORM_HOLD).unwrap();
+        let status = bus.subscribe(topics::TASK_STATUS).unwrap();
+        let placements = bus.subscribe(topics::ARM_PLACEMENT).unwrap();
+        bus.publish(topics::LOCALIZATION_ESTIMATE, EstimateMsg::default()).unwrap();
+        let cmd = ArmTaskMsg { task: 7, action: ArmAction::PlaceInstrument, target: [1.0, 0.0] };
+        bus.publish(topics::ARM_COMMAND, cmd).unwrap();
+        arm.step(&mut Ctx { bus: &mut bus, time_s: 0.0 }).unwrap();
+        // The imaging sequence: back a step, a pair, the step, the pairs; all the arm's own.
+        let requests = bus.take(&motion).unwrap();
+        assert_eq!(requests.len(), 4);
+        assert!(requests.iter().all(|r| r.origin == Origin::Arm(7)));
+        assert!(
+            matches!(requests[0].command, CommandMsg::Drive { distance, .. } if distance == -LAST_STEP_M)
+        );
+        assert!(matches!(requests[2].command, CommandMsg::Drive { distance, .. } if distance == LAST_STEP_M));
+        assert_eq!(bus.take(&status).unwrap()[0].state, TaskState::InProcess);
+        // The frames come back without images: AutoPlace refuses for no data.
+        for (seq, r) in requests.iter().enumerate() {
+            let frame =
+                FrameMsg::new(seq as u64 + 1, FrameSource::Command((**r).clone()), &SensorFrame::default());
+            bus.publish(topics::PLATFORM_FRAME, frame).unwrap();
+            arm.step(&mut Ctx { bus: &mut bus, time_s: 1.0 + seq as f64 }).unwrap();
+        }
+        let done = bus.take(&status).unwrap();
+        assert_eq!(done.len(), 1);
+        assert_eq!(done[0].state, TaskState::Failure);
+        assert!(done[0].message.contains("refused: no_data") && done[0].message.contains("nothing moved"));
+        assert!(bus.take(&holds).unwrap().is_empty(), "nothing moves on a refusal");
+        let p = bus.take(&placements).unwrap();
+        assert_eq!((p.len(), p[0].reason.as_deref()), (1, Some("no_data")));
+        assert_eq!(arm.placements().len(), 1);
+        // The arm is free again.
+        bus.publish(topics::ARM_COMMAND, ArmTaskMsg { task: 8, ..cmd }).unwrap();
+        arm.step(&mut Ctx { bus: &mut bus, time_s: 9.0 }).unwrap();
+        assert_eq!(bus.take(&motion).unwrap().len(), 4);
+    }
+}
