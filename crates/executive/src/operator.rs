@@ -10,7 +10,9 @@
 pub trait OperatorLink {
     /// The lines typed since the last call. `waiting` says the mission is holding for the
     /// operator (paused or emergency-stopped): a live link may then wait a little for input
-    /// instead of letting simulated time race ahead.
+    /// instead of letting simulated time race ahead. Once the mission is over the loop polls
+    /// with `cycles` = `u64::MAX` and `waiting` set until a call gives nothing, answering each
+    /// line `mission over: <outcome>` (or `status`, `help`) instead of dropping it.
     fn poll(&mut self, cycles: u64, waiting: bool) -> Vec<String>;
     /// One answer of the deliberative layer (may span several lines).
     fn reply(&mut self, text: &str);

@@ -179,7 +179,8 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
     };
     // The deliberative layer's last state commands (stand down) take effect.
     runtime.settle(runtime.clock())?;
-    forward_replies(runtime.bus(), &replies, operator)?;
+    forward_replies(runtime.bus(), &replies, operator.as_deref_mut())?;
+    answer_after_end(runtime.bus(), &mut deliberative, &replies, operator)?;
     if let Some(tap) = tap {
         observer.on_bus(&runtime.bus().take_tap(tap)?);
     }
@@ -404,6 +405,29 @@ fn injected_faults(
             hazard_contacts_after: contacts.saturating_sub(f.hazard_contacts_before),
         })
         .collect()
+}
+
+/// Answers the operator's lines still to come once the mission is over ("mission over:
+/// <outcome>" for a command, the answer for `status` or `help`) instead of dropping them: every
+/// line the link still gives, until it gives none.
+fn answer_after_end<'a>(
+    bus: &mut Bus,
+    deliberative: &mut Deliberative,
+    replies: &Subscriber<String>,
+    operator: Option<&mut (dyn OperatorLink + 'a)>,
+) -> Result<(), BusError> {
+    let Some(link) = operator else { return Ok(()) };
+    loop {
+        let lines = link.poll(u64::MAX, true);
+        if lines.is_empty() {
+            return Ok(());
+        }
+        for line in lines {
+            bus.publish(topics::OPERATOR_COMMAND, line)?;
+        }
+        deliberative.step(bus)?;
+        forward_replies(bus, replies, Some(&mut *link))?;
+    }
 }
 
 /// Hands the deliberative layer's answers to the operator.

@@ -8,12 +8,19 @@
 //! waits for the operator the run waits for input in wall-clock time, so a paused rover does not
 //! burn through its simulated time budget; when input ends, a running mission carries on and a
 //! waiting one is aborted. Banner and progress go to standard error.
+//!
+//! The simulation runs as fast as it can unless `--speed X` (X simulated seconds per wall-clock
+//! second) or `--realtime` (`--speed 1`) paces it: after each executed command the run sleeps
+//! until the wall clock has caught up with simulated time, so a `drive 1` answers when the drive
+//! would have ended. Every direct motion is answered when it has run (completed, or the guard
+//! that stopped it and how far it went), and lines typed after the end are answered
+//! `mission over: <outcome>` before the run exits.
 
 use crate::RunArgs;
 use rovernav_executive::{OperatorLink, Run};
 use std::io::{BufRead, Write};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// How long a waiting mission waits for a line per cycle (wall clock).
 const WAIT_FOR_INPUT: Duration = Duration::from_millis(100);
@@ -93,6 +100,47 @@ impl OperatorLink for StdinLink {
     }
 }
 
+/// Paces simulated time against the wall clock.
+struct Pacer {
+    /// Simulated seconds per wall-clock second.
+    speed: f64,
+    /// A wall-clock instant and the simulated time it stands for.
+    anchor: (Instant, f64),
+}
+
+/// How far the wall clock may run ahead of paced simulated time (waiting for input, slow
+/// computing) before pacing starts again from now rather than letting the simulation catch up
+/// in a burst.
+const PACE_SLACK: Duration = Duration::from_millis(250);
+
+impl Pacer {
+    /// Pacing from now, at simulated time 0.
+    fn new(speed: f64) -> Self {
+        Self { speed, anchor: (Instant::now(), 0.0) }
+    }
+
+    /// Sleeps until the wall clock reaches simulated time `t`.
+    fn pace(&mut self, t: f64) {
+        let (wall, sim) = self.anchor;
+        let due = wall + Duration::from_secs_f64(((t - sim) / self.speed).clamp(0.0, 1e6));
+        let now = Instant::now();
+        if now > due + PACE_SLACK {
+            self.anchor = (now, t);
+        } else if due > now {
+            std::thread::sleep(due - now);
+        }
+    }
+}
+
+/// Parses `--speed`: a finite number of simulated seconds per second above zero.
+pub fn parse_speed(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Ok(_) => Err(format!("`{text}` is not a speed above zero")),
+        Err(e) => Err(format!("`{text}` is not a number: {e}")),
+    }
+}
+
 /// A line's bytes without its `\n` or `\r\n` ending.
 fn strip_line_end(mut bytes: Vec<u8>) -> Vec<u8> {
     if bytes.last() == Some(&b'\n') {
@@ -107,15 +155,23 @@ fn strip_line_end(mut bytes: Vec<u8>) -> Vec<u8> {
 /// Runs a mission with operator commands from standard input.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let crate::MissionToRun { mission, origin_of_navigator, out_dir } = crate::MissionToRun::of(&args)?;
+    let speed = args.speed.or(args.realtime.then_some(1.0));
+    let pacing = speed.map_or("as fast as possible".to_string(), |x| format!("at {x} x real time"));
     eprintln!(
-        "rovernav: mission `{}` running with operator input; `help` lists the commands, `mission pause` holds the rover",
+        "rovernav: mission `{}` running {pacing} with operator input; `help` lists the commands, `mission pause` holds the rover",
         mission.name
     );
     let mut link = StdinLink::spawn();
     // The world first: a mission that cannot be built leaves no telemetry.mcap.
     let run = Run::mission(&mission, &origin_of_navigator)?;
     let mut log = crate::output::RunLog::open(&out_dir)?;
-    let output = run.observer(&mut log.recorder).operator(&mut link).execute();
+    let mut pacer = speed.map(Pacer::new);
+    let mut pace = |p: &rovernav_executive::Progress| {
+        if let Some(pacer) = pacer.as_mut() {
+            pacer.pace(p.sim_time_s);
+        }
+    };
+    let output = run.observer(&mut log.recorder).operator(&mut link).progress(&mut pace).execute();
     log.close(output.is_ok())?;
     let output = output?;
     crate::output::write_run_outputs(&out_dir, &output)?;

@@ -132,6 +132,13 @@ struct RunArgs {
     /// the mission starts at once (`mission pause` holds it) and answers go to standard output.
     #[arg(long)]
     interactive: bool,
+    /// With --interactive: pace the simulation against the wall clock, X simulated seconds per
+    /// second (default: as fast as possible).
+    #[arg(long, value_name = "X", requires = "interactive", value_parser = interactive::parse_speed)]
+    speed: Option<f64>,
+    /// With --interactive: run in real time (--speed 1).
+    #[arg(long, requires = "interactive", conflicts_with = "speed")]
+    realtime: bool,
 }
 
 /// The mission a `rovernav run` names, with its command-line overrides applied.

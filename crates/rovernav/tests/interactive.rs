@@ -23,3 +23,50 @@ fn piped_commands_change_the_goal_answer_status_and_name_the_bad_token() {
     assert!(report["goal_error_m"].as_f64().unwrap() < 1.0, "{report}");
     assert_eq!(report["tasks"][0]["target"], serde_json::json!([3.5, 9.0]));
 }
+
+#[test]
+fn a_paced_run_takes_its_simulated_time_over_the_speed_and_answers_every_command() {
+    let dir = std::env::temp_dir().join(format!("rovernav-paced-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let speed = 20.0;
+    // Turns and drives of the paused rover (about 20 s simulated), then a line after the end.
+    let input = b"mission pause\nturn 90\ndrive 1\nturn -45\ndrive 1\nmission abort\ndrive 1\n";
+    let wall = std::time::Instant::now();
+    let result = common::run_interactive_with(&dir, input, &["--speed", "20"]);
+    let wall = wall.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "stdout: {stdout}\nstderr: {stderr}");
+    assert!(stderr.contains("at 20 x real time"), "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/report.json")).unwrap()).unwrap();
+    assert_eq!(report["outcome"], "aborted", "{report}");
+    // A lower bound only: the wall clock kept up with simulated time over the speed.
+    let sim = report["sim_time_s"].as_f64().unwrap();
+    assert!(sim > 10.0, "the motions took simulated time: {report}");
+    assert!(wall >= sim / speed, "{sim:.1} s simulated in {wall:.2} s of wall time at --speed {speed}");
+    // The drive is answered with what it did, the line after the end with the outcome.
+    assert!(stdout.contains("`turn 90` completed: "), "{stdout}");
+    assert!(
+        stdout.contains("`drive 1` completed: ") || stdout.contains("`drive 1` stopped after "),
+        "{stdout}"
+    );
+    assert!(stdout.contains("mission over: aborted; `drive 1` not executed"), "{stdout}");
+}
+
+#[test]
+fn speed_needs_interactive_and_a_positive_number() {
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_rovernav")).arg("run").args(args).output().unwrap()
+    };
+    for (args, needle) in [
+        (&["--speed", "2"][..], "--interactive"),
+        (&["--interactive", "--speed", "0"][..], "not a speed above zero"),
+        (&["--interactive", "--speed", "fast"][..], "not a number"),
+        (&["--interactive", "--speed", "2", "--realtime"][..], "cannot be used with"),
+    ] {
+        let out = run(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(needle), "{args:?}: {stderr}");
+    }
+}

@@ -24,7 +24,7 @@ impl Deliberative {
             && !matches!(cmd, C::Status | C::Help { .. } | C::WaypointList)
         {
             let outcome = self.end.as_ref().map_or("over", |(o, _)| o.as_str());
-            return Ok(format!("error: `{cmd}`: the mission is over ({outcome})"));
+            return Ok(format!("mission over: {outcome}; `{cmd}` not executed"));
         }
         let target = match &cmd {
             C::Goto { x, y }
@@ -62,6 +62,7 @@ impl Deliberative {
             }
             C::Stop => {
                 self.control(bus, None, ControlAction::EmergencyStop)?;
+                self.abandon_direct(bus, "emergency stop")?;
                 self.fp.set_target(None);
                 self.state = MissionState::Stopped;
                 "emergency stop: every component to Emergency; `mission start` clears it".into()
@@ -69,13 +70,16 @@ impl Deliberative {
             C::Drive { distance } => self.direct(
                 bus,
                 cmd.clone(),
+                super::direct::Asked::Drive(distance),
                 CommandMsg::Drive {
                     distance,
                     curvature: 0.0,
                     guard: DriveGuard { proximity: distance > 0.0, max_tilt: None },
                 },
             )?,
-            C::Turn { angle } => self.direct(bus, cmd.clone(), CommandMsg::Turn { angle })?,
+            C::Turn { angle } => {
+                self.direct(bus, cmd.clone(), super::direct::Asked::Turn(angle), CommandMsg::Turn { angle })?
+            }
             C::SetPosition { x, y, yaw } => {
                 let Some(e) = self.estimate else {
                     return Ok("error: `set position`: no pose estimate yet".into());
@@ -221,6 +225,7 @@ impl Deliberative {
         &mut self,
         bus: &mut Bus,
         cmd: OperatorCommand,
+        asked: super::direct::Asked,
         command: CommandMsg,
     ) -> Result<String, BusError> {
         if self.state != MissionState::Paused {
@@ -231,6 +236,7 @@ impl Deliberative {
         }
         let id = self.command_id();
         bus.publish(topics::EXECUTIVE_MOTION, MotionRequest { id, origin: Origin::Operator, command })?;
+        self.follow_direct(id, cmd.to_string(), asked);
         Ok(format!("executing `{cmd}`"))
     }
 

@@ -17,6 +17,7 @@
 
 mod approach;
 mod commands;
+mod direct;
 mod plan;
 mod science_watch;
 mod tasks;
@@ -24,6 +25,7 @@ mod tasks;
 mod tests;
 
 pub use approach::{NAVIGATOR_LEG_MIN_M, TRACK_STANDOFF_M};
+pub use direct::stop_cause;
 pub use science_watch::{Watch, WatchKind, WatchSpec, WatchSummary};
 pub use tasks::{Designation, Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
 
@@ -102,6 +104,8 @@ pub struct Deliberative {
     /// The terrain's extent [x min, y min, x max, y max] (m): operator targets outside it are
     /// refused before a map is sized from them.
     area: Option<[f64; 4]>,
+    /// The operator's direct motions not answered yet.
+    direct: Vec<direct::DirectMotion>,
 }
 
 impl Deliberative {
@@ -153,6 +157,7 @@ impl Deliberative {
             approaches: BTreeMap::new(),
             last_navcam: None,
             area: None,
+            direct: Vec::new(),
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -282,6 +287,7 @@ impl Deliberative {
             self.estimate = Some(*e);
         }
         for f in &frames {
+            self.direct_frame(f);
             self.watch_frame(f);
             self.approach_frame(f);
             self.time_s = f.t;
@@ -294,6 +300,7 @@ impl Deliberative {
                 }
             }
         }
+        self.answer_direct(bus)?;
         for s in bus.take(&self.components_sub)? {
             self.components.insert(s.component.clone(), (s.state, s.message.clone()));
             if self.pending_diagnosis.is_none() && self.state != MissionState::Finished {
@@ -405,6 +412,7 @@ impl Deliberative {
         self.fp.set_target(None);
         self.control(bus, None, ControlAction::Standby)?;
         self.state = MissionState::Finished;
+        self.abandon_direct(bus, &format!("mission over: {} ({why})", outcome.as_str()))?;
         self.end = Some((outcome, why));
         Ok(())
     }

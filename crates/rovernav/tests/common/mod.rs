@@ -12,12 +12,19 @@ pub const SMALL_YARD: &str = concat!(
 /// `input` piped to standard input, and waits for it.
 #[allow(dead_code)] // not every test file that shares these fixtures runs the binary interactively
 pub fn run_interactive(dir: &std::path::Path, input: &[u8]) -> std::process::Output {
+    run_interactive_with(dir, input, &[])
+}
+
+/// [`run_interactive`] with `extra` arguments after the usual ones (`--speed 20`).
+#[allow(dead_code)]
+pub fn run_interactive_with(dir: &std::path::Path, input: &[u8], extra: &[&str]) -> std::process::Output {
     use std::io::Write;
     let mission = dir.join("mission.toml");
     std::fs::write(&mission, SMALL_YARD).unwrap();
     let out = dir.join("out");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_rovernav"))
         .args(["run", mission.to_str().unwrap(), "--interactive", "--out", out.to_str().unwrap()])
+        .args(extra)
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())

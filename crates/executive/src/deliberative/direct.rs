@@ -1,0 +1,120 @@
+//! The operator's direct motions (`drive`, `turn`) followed to their end: each is answered once
+//! the platform has executed it, with its completion or the reason it stopped (the guard that
+//! tripped, a hazard contact, a stall) and how far it went, or with why it never ran (an
+//! emergency stop, the mission's end).
+//!
+//! How far is judged from the pose estimate (before the command and after the estimator has
+//! integrated the command's frame), never from the simulator's truth, which the autonomy does
+//! not have.
+
+use super::Deliberative;
+use crate::messages::{FrameMsg, Origin, topics};
+use rovernav_bus::{Bus, BusError};
+use rovernav_core::{Pose3, wrap_angle};
+
+/// A direct motion the operator asked for, until it is answered.
+#[derive(Clone, Debug)]
+pub(super) struct DirectMotion {
+    /// The motion request's id.
+    pub id: u64,
+    /// The command as the operator would type it (`drive 1`).
+    pub text: String,
+    /// What was asked: a distance (m) or an angle (rad).
+    pub asked: Asked,
+    /// The estimate when the command was issued.
+    pub start: Option<Pose3>,
+    /// Once executed: the frame's number and why the motion stopped, if it did.
+    pub executed: Option<(u64, Option<String>)>,
+}
+
+/// What a direct motion asked for.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Asked {
+    /// Drive this far (m; negative backwards).
+    Drive(f64),
+    /// Turn by this angle (rad).
+    Turn(f64),
+}
+
+/// The guard or event a platform's `motion_stopped` text names, in the operator's words.
+pub fn stop_cause(why: &str) -> &'static str {
+    if why.contains("proximity") {
+        "the proximity guard tripped"
+    } else if why.contains("tilt") {
+        "the tilt guard tripped"
+    } else if why.starts_with("stall") {
+        "the wheels stalled"
+    } else if why.contains("terrain model") {
+        "the rover reached the edge of the terrain model"
+    } else {
+        "the rover met a hazard"
+    }
+}
+
+impl Deliberative {
+    /// Remembers a direct motion just requested, to answer it when it has run.
+    pub(super) fn follow_direct(&mut self, id: u64, text: String, asked: Asked) {
+        let start = self.estimate.as_ref().map(|e| e.pose);
+        self.direct.push(DirectMotion { id, text, asked, start, executed: None });
+    }
+
+    /// Notes a frame that executed a followed direct motion.
+    pub(super) fn direct_frame(&mut self, f: &FrameMsg) {
+        let Some(r) = f.request().filter(|r| r.origin == Origin::Operator) else { return };
+        if let Some(d) = self.direct.iter_mut().find(|d| d.id == r.id && d.executed.is_none()) {
+            d.executed = Some((f.seq, f.motion_stopped.clone()));
+        }
+    }
+
+    /// Answers every executed direct motion whose frame the estimate has integrated.
+    pub(super) fn answer_direct(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        let Some(now) = self.estimate.as_ref().map(|e| (e.frame_seq, e.pose)) else { return Ok(()) };
+        let (ready, waiting): (Vec<_>, Vec<_>) = std::mem::take(&mut self.direct)
+            .into_iter()
+            .partition(|d| d.executed.as_ref().is_some_and(|(seq, _)| *seq <= now.0));
+        self.direct = waiting;
+        for d in ready {
+            bus.publish(topics::OPERATOR_REPLY, outcome_text(&d, &now.1))?;
+        }
+        Ok(())
+    }
+
+    /// Answers every direct motion still waiting: it will not run (or not be judged) because
+    /// of `why`.
+    pub(super) fn abandon_direct(&mut self, bus: &mut Bus, why: &str) -> Result<(), BusError> {
+        for d in std::mem::take(&mut self.direct) {
+            let text = match (&d.executed, self.estimate.as_ref()) {
+                (Some(_), Some(e)) => format!("{}; then {why}", outcome_text(&d, &e.pose)),
+                _ => format!("`{}` not executed: {why}", d.text),
+            };
+            bus.publish(topics::OPERATOR_REPLY, text)?;
+        }
+        Ok(())
+    }
+}
+
+/// The answer to an executed direct motion, the estimate `end` after it.
+fn outcome_text(d: &DirectMotion, end: &Pose3) -> String {
+    let stopped = d.executed.as_ref().and_then(|(_, why)| why.as_deref());
+    let Some(start) = d.start else {
+        return match stopped {
+            Some(why) => format!("`{}` stopped: {} ({why})", d.text, stop_cause(why)),
+            None => format!("`{}` completed", d.text),
+        };
+    };
+    let (done, asked) = match d.asked {
+        Asked::Drive(m) => {
+            (format!("{:.2} m", (end.x - start.x).hypot(end.y - start.y)), format!("{:.2} m", m.abs()))
+        }
+        Asked::Turn(a) => (
+            format!("{:.1} deg", wrap_angle(end.yaw - start.yaw).to_degrees()),
+            format!("{:.1} deg", a.to_degrees()),
+        ),
+    };
+    match stopped {
+        Some(why) => {
+            format!("`{}` stopped after {done} of {asked}: {} ({why}; estimate)", d.text, stop_cause(why))
+        }
+        None => format!("`{}` completed: {done} (estimate)", d.text),
+    }
+}
