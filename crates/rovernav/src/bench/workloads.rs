@@ -2,7 +2,7 @@
 //! rovernav's implementation and its baseline on the same input in this process and checks
 //! that they agree (path costs, optima, distances) before reporting times.
 
-use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, random_occupancy};
+use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, meijster, random_occupancy};
 use super::report::{Row, alternate};
 use anyhow::{Context, anyhow, ensure};
 use pathfinding::directed::{astar::astar, dijkstra::dijkstra};
@@ -269,13 +269,18 @@ pub fn edt(quick: bool) -> anyhow::Result<Row> {
         {
             return Err(anyhow!("edt {side}: cell {i}: rovernav {} vs exact baseline {}", ours[i], exact[i]));
         }
-        let ((t_chamfer, _), _, _) = alternate(reps, || chamfer_3_4(&occ, side, side), || ());
+        let ((t_chamfer, t_meijster), _, fast) =
+            alternate(reps, || chamfer_3_4(&occ, side, side), || meijster(&occ, side, side));
+        if let Some(i) = fast.iter().zip(&exact).position(|(&a, &b)| f64::from(a) != b) {
+            return Err(anyhow!("edt {side}: cell {i}: Meijster {} vs exact baseline {}", fast[i], exact[i]));
+        }
         details.insert(
             format!("ns_per_cell_{side}"),
             json!({
                 "rovernav_exact": t_ours * 1e9 / cells,
                 "felzenszwalb_huttenlocher": t_base * 1e9 / cells,
                 "chamfer_3_4": t_chamfer * 1e9 / cells,
+                "meijster_cache_friendly": t_meijster * 1e9 / cells,
             }),
         );
         main = Some((t_ours, t_base));
