@@ -4,6 +4,7 @@ mod bench;
 mod campaign;
 mod distributed;
 mod eval_autoplace;
+mod eval_descent;
 mod eval_horizon;
 mod eval_lander;
 mod eval_localization;
@@ -88,6 +89,8 @@ enum EvalCommand {
     Lander(eval_lander::EvalLanderArgs),
     /// Orbital-map localisation: the mast panorama's map matched against the Gale DEM at an orbital resolution.
     Orbital(eval_orbital::EvalOrbitalArgs),
+    /// Descent imagery: elevations from consecutive descent images against the paper's predicted precision.
+    Descent(eval_descent::EvalDescentArgs),
 }
 
 /// Options of `rovernav navigators`.
@@ -233,6 +236,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(EvalCommand::Autoplace(args))) => eval_autoplace::run(args),
         Some(Command::Eval(EvalCommand::Lander(args))) => eval_lander::run(args),
         Some(Command::Eval(EvalCommand::Orbital(args))) => eval_orbital::run(args),
+        Some(Command::Eval(EvalCommand::Descent(args))) => eval_descent::run(args),
         Some(Command::Navigators(args)) => navigators(args),
         Some(Command::Graph(args)) => graph_cmd::run(args),
         Some(Command::Campaign(args)) => campaign::run(args),

@@ -82,6 +82,22 @@ pub fn downsample_2x(image: &View) -> (Vec<f32>, usize, usize) {
     (out, w, h)
 }
 
+/// The image blurred by a Gaussian of `sigma` pixels (a copy when `sigma` is not positive).
+fn blur(image: &View, sigma: f64) -> Vec<f32> {
+    if sigma.is_nan() || sigma <= 0.0 {
+        return image.pixels.to_vec();
+    }
+    let buffer = image::ImageBuffer::<image::Luma<f32>, Vec<f32>>::from_raw(
+        image.width as u32,
+        image.height as u32,
+        image.pixels.to_vec(),
+    );
+    match buffer {
+        Some(b) => imageproc::filter::gaussian_blur_f32(&b, sigma as f32).into_raw(),
+        None => image.pixels.to_vec(),
+    }
+}
+
 /// Options of [`match_pair`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MatchParams {
@@ -91,6 +107,11 @@ pub struct MatchParams {
     pub half_window: usize,
     /// Half side of the search around the prior's prediction (pixels of the averaged image).
     pub search_px: usize,
+    /// Standard deviation of the Gaussian blur applied to the upper and the averaged lower
+    /// image before matching (pixels; 0 for none): it removes the content near the sampling
+    /// limit, which the 2x2 average lets through from the lower image and the upper image
+    /// never had.
+    pub blur_px: f64,
     /// Least normalised cross-correlation of an accepted match.
     pub min_ncc: f64,
     /// Least smaller structure-tensor eigenvalue per window pixel, relative to the image's
@@ -100,7 +121,7 @@ pub struct MatchParams {
 
 impl Default for MatchParams {
     fn default() -> Self {
-        Self { cell_px: 8, half_window: 7, search_px: 12, min_ncc: 0.8, min_texture: 1e-5 }
+        Self { cell_px: 8, half_window: 7, search_px: 12, blur_px: 1.0, min_ncc: 0.8, min_texture: 1e-5 }
     }
 }
 
@@ -142,7 +163,10 @@ pub fn match_pair<C: CameraModel>(
     let (up, up_cam) = upper;
     let (lo, lo_cam) = lower;
     let (small, sw, sh) = downsample_2x(lo);
+    let small = blur(&View { pixels: &small, width: sw, height: sh }, params.blur_px);
     let small = View { pixels: &small, width: sw, height: sh };
+    let up_blurred = blur(up, params.blur_px);
+    let up = &View { pixels: &up_blurred, ..*up };
     let score = min_eigenvalue(up, params.half_window);
     let mean_sq = up.pixels.iter().map(|&p| (p as f64).powi(2)).sum::<f64>() / up.pixels.len().max(1) as f64;
     let min_score = params.min_texture * mean_sq * ((2 * params.half_window + 1) as f64).powi(2);

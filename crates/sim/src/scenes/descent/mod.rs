@@ -4,9 +4,10 @@
 //! The camera is a CAHV pinhole ([`rovernav_vision::Cahv`]) looking straight down, image
 //! samples along +x (east) and lines along -y (south), 73.4 deg across `size` pixels (the Mars
 //! Surveyor'98 descent imager of the paper; 1000 pixels by default). Image k is taken at
-//! `top_altitude_m / 2^k` above the landing site, horizontally displaced by a drift drawn for
-//! the seed (2 % of the altitude per axis, the parachute's wander); the lander's navigation is
-//! assumed to know every camera pose, so the sequence carries its true cameras.
+//! `top_altitude_m / 2^k` above the landing site, straight above it by default (the paper's
+//! ideal purely vertical descent) or horizontally displaced by a drift drawn for the seed
+//! (`drift_fraction` of the altitude per axis, the parachute's wander); the lander's navigation
+//! is assumed to know every camera pose, so the sequence carries its true cameras.
 //!
 //! Each pixel's ray is intersected with the ground by fixed-point iteration on the height
 //! (`z <- h(x(z), y(z))`, which converges where the ground's slope along the ray is below the
@@ -58,7 +59,7 @@ impl Default for DescentPlan {
             images: 10,
             size: 1000,
             fov_deg: 73.4,
-            drift_fraction: 0.02,
+            drift_fraction: 0.0,
             noise_fraction: 0.01,
             sun_deg: [40.0, 120.0],
         }

@@ -10,7 +10,8 @@
 //! height differences over 1 m have an RMS near 0.14 m (an RMS slope near 8 deg, the Gale DEM's
 //! mean slope). Every query takes the shortest wavelength to include: an image renders the
 //! ground band-limited to two of its pixels, so nothing finer than it can resolve aliases.
-//! Albedo varies by 15 % with its own fractal (H = 0.5) and the same band limit.
+//! Albedo varies with its own fractal, nearly the same contrast at every scale (H = 0.1, 4 %
+//! per octave at 1 m wavelength): dust, sand and rock differ in brightness at every scale.
 
 use rovernav_terrain::Dem;
 use rovernav_terrain::procedural::noise::gradient_noise;
@@ -24,8 +25,10 @@ const HURST: f64 = 0.8;
 /// Relief amplitude: octave of wavelength L has amplitude `RELIEF_SCALE * L^HURST` (m); 0.12
 /// gives 0.14 m RMS height differences over 1 m (checked by a test).
 const RELIEF_SCALE: f64 = 0.12;
-/// Shortest wavelength the 1 m DEM carries (m): finer octaves are added on top of it.
-const DEM_WAVELENGTH_M: f64 = 2.0;
+/// Shortest wavelength the 1 m DEM carries (m): finer octaves are added on top of it. A
+/// stereo DEM posted at 1 m resolves about 3 posts (the correlation window smooths it), so
+/// octaves from 2 m down are added.
+const DEM_WAVELENGTH_M: f64 = 4.0;
 /// Width of the blend from the DEM to procedural relief inside the DEM's edge (m).
 const DEM_TAPER_M: f64 = 40.0;
 
@@ -39,6 +42,9 @@ pub struct DescentTerrain {
     dem: Option<Dem>,
     /// DEM local coordinates of the landing site and its DEM height.
     dem_site: [f64; 3],
+    /// Distance of each DEM cell from the nearest cell without data or the grid's edge
+    /// (cells, chamfer 3-4 metric).
+    edge_distance: Vec<f32>,
     /// Height of the long-wavelength fractal at the landing site (subtracted, so that the
     /// procedural ground meets the DEM near z = 0).
     fractal_site: f64,
@@ -47,7 +53,8 @@ pub struct DescentTerrain {
 impl DescentTerrain {
     /// Procedural ground only, deterministic for `seed`.
     pub fn procedural(seed: u32) -> Self {
-        let mut t = Self { seed, dem: None, dem_site: [0.0; 3], fractal_site: 0.0 };
+        let mut t =
+            Self { seed, dem: None, dem_site: [0.0; 3], edge_distance: Vec::new(), fractal_site: 0.0 };
         t.fractal_site = t.fractal(0.0, 0.0, DEM_WAVELENGTH_M, f64::INFINITY, 0.8, RELIEF_SCALE, 0);
         t
     }
@@ -57,8 +64,9 @@ impl DescentTerrain {
     pub fn with_dem(dem: Dem, seed: u32) -> Option<Self> {
         let g = *dem.geometry();
         let (cx, cy) = (g.origin_x + 0.5 * g.width_m(), g.origin_y + 0.5 * g.height_m());
-        let z = dem.height(cx, cy)?;
+        let z = catmull_rom(&dem, cx, cy)?;
         let mut t = Self::procedural(seed);
+        t.edge_distance = edge_distance(&dem);
         t.dem = Some(dem);
         t.dem_site = [cx, cy, z];
         Some(t)
@@ -93,12 +101,12 @@ impl DescentTerrain {
     fn dem_part(&self, x: f64, y: f64) -> Option<(f64, f64)> {
         let dem = self.dem.as_ref()?;
         let (dx, dy) = (x + self.dem_site[0], y + self.dem_site[1]);
-        let z = dem.height(dx, dy)? - self.dem_site[2];
+        let z = catmull_rom(dem, dx, dy)? - self.dem_site[2];
         let g = dem.geometry();
-        let edge = (dx - g.origin_x)
-            .min(g.origin_x + g.width_m() - dx)
-            .min(dy - g.origin_y)
-            .min(g.origin_y + g.height_m() - dy);
+        let edge = match g.cell_of(dx, dy) {
+            Some((c, r)) => self.edge_distance[g.index(c, r)] as f64 * g.resolution,
+            None => 0.0,
+        };
         let t = (edge / DEM_TAPER_M).clamp(0.0, 1.0);
         Some((t * t * (3.0 - 2.0 * t), z))
     }
@@ -119,7 +127,7 @@ impl DescentTerrain {
 
     /// Albedo at (x, y), band-limited like [`DescentTerrain::height`].
     pub fn albedo(&self, x: f64, y: f64, min_wavelength_m: f64) -> f64 {
-        let a = self.fractal(x, y, min_wavelength_m.max(1e-3), 2048.0, 0.5, 0.15 / 45.0, 0x5eed);
+        let a = self.fractal(x, y, min_wavelength_m.max(1e-3), 2048.0, 0.1, 0.04, 0x5eed);
         0.25 * (1.0 + a.clamp(-0.6, 0.6))
     }
 
@@ -127,6 +135,68 @@ impl DescentTerrain {
     pub fn in_dem(&self, x: f64, y: f64) -> bool {
         self.dem_part(x, y).is_some_and(|(w, _)| w > 0.0)
     }
+}
+
+/// Each cell's distance (cells) from the nearest cell without data or outside the grid, by the
+/// two-pass chamfer transform with weights 3 (side) and 4 (diagonal), divided by 3.
+fn edge_distance(dem: &Dem) -> Vec<f32> {
+    let g = dem.geometry();
+    let (w, h) = (g.cols as isize, g.rows as isize);
+    let mut d: Vec<f32> =
+        dem.heights.data.iter().map(|v| if v.is_finite() { f32::MAX } else { 0.0 }).collect();
+    let at = |d: &[f32], c: isize, r: isize| {
+        if c < 0 || r < 0 || c >= w || r >= h { 0.0 } else { d[(r * w + c) as usize] }
+    };
+    let pass = |d: &mut Vec<f32>, order: &[(isize, isize, f32)], forward: bool| {
+        for k in 0..w * h {
+            let i = if forward { k } else { w * h - 1 - k };
+            let (c, r) = (i % w, i / w);
+            let mut best = d[i as usize];
+            for &(dc, dr, cost) in order {
+                best = best.min(at(d, c + dc, r + dr) + cost);
+            }
+            d[i as usize] = best;
+        }
+    };
+    pass(&mut d, &[(-1, 0, 3.0), (-1, -1, 4.0), (0, -1, 3.0), (1, -1, 4.0)], true);
+    pass(&mut d, &[(1, 0, 3.0), (1, 1, 4.0), (0, 1, 3.0), (-1, 1, 4.0)], false);
+    d.iter().map(|v| v / 3.0).collect()
+}
+
+/// The DEM's height at a local point by Catmull-Rom interpolation between cell centres (the
+/// slope is continuous, so shading shows no cell edges as bilinear facets would); `None`
+/// outside the grid or next to a cell without data.
+fn catmull_rom(dem: &Dem, x: f64, y: f64) -> Option<f64> {
+    let g = dem.geometry();
+    let (fx, fy) = ((x - g.origin_x) / g.resolution - 0.5, (y - g.origin_y) / g.resolution - 0.5);
+    if !(fx >= 0.0 && fy >= 0.0 && fx <= (g.cols - 1) as f64 && fy <= (g.rows - 1) as f64) {
+        return None;
+    }
+    let (c0, r0) = (fx.floor() as isize, fy.floor() as isize);
+    let (tx, ty) = (fx - c0 as f64, fy - r0 as f64);
+    let weights = |t: f64| {
+        let (t2, t3) = (t * t, t * t * t);
+        [
+            0.5 * (-t3 + 2.0 * t2 - t),
+            0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+            0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+            0.5 * (t3 - t2),
+        ]
+    };
+    let (wx, wy) = (weights(tx), weights(ty));
+    let mut sum = 0.0;
+    for (j, wyj) in wy.iter().enumerate() {
+        let r = (r0 + j as isize - 1).clamp(0, g.rows as isize - 1) as usize;
+        for (i, wxi) in wx.iter().enumerate() {
+            let c = (c0 + i as isize - 1).clamp(0, g.cols as isize - 1) as usize;
+            let v = *dem.heights.get(c, r);
+            if !v.is_finite() || dem.nodata == Some(v) {
+                return None;
+            }
+            sum += wxi * wyj * v as f64;
+        }
+    }
+    Some(sum)
 }
 
 #[cfg(test)]
@@ -164,5 +234,37 @@ mod tests {
         }
         assert!(worst > 0.01 && worst < 5.0, "largest change {worst:.3} m");
         assert!(t.albedo(1.0, 2.0, 0.1) > 0.0);
+    }
+
+    #[test]
+    fn the_dem_sits_at_the_landing_site_and_its_interpolation_keeps_planes() {
+        use rovernav_core::{Grid2, GridGeometry};
+        let geometry = GridGeometry { cols: 200, rows: 200, resolution: 1.0, origin_x: 0.0, origin_y: 0.0 };
+        let mut grid = Grid2::filled(geometry, 0f32);
+        for r in 0..200 {
+            for c in 0..200 {
+                let (x, y) = geometry.center(c, r);
+                *grid.get_mut(c, r) = (100.0 + 0.2 * x - 0.1 * y) as f32;
+            }
+        }
+        let dem = Dem::from_grid(grid);
+        // Catmull-Rom reproduces a plane between cell centres.
+        let z = catmull_rom(&dem, 37.3, 81.9).unwrap();
+        assert!((z - (100.0 + 0.2 * 37.3 - 0.1 * 81.9)).abs() < 1e-3, "{z}");
+        assert!(catmull_rom(&dem, -3.0, 5.0).is_none());
+        // Inside the taper the ground is the DEM (shifted to z = 0 at the site) plus fine detail.
+        let t = DescentTerrain::with_dem(dem, 9).unwrap();
+        let (x, y) = (20.0, -30.0);
+        let expected = 0.2 * x - 0.1 * y;
+        assert!((t.height(x, y, 2.0) - expected).abs() < 1e-3, "{} vs {expected}", t.height(x, y, 2.0));
+        assert!((t.height(x, y, 0.01) - expected).abs() < 1.0);
+        assert!(t.in_dem(x, y) && !t.in_dem(500.0, 0.0));
+        // A cell without data: the DEM's weight falls to zero there and is full 40 m away.
+        let mut holed = t.dem.clone().unwrap();
+        *holed.heights.get_mut(150, 100) = f32::NAN;
+        let t = DescentTerrain::with_dem(holed, 9).unwrap();
+        assert_eq!(t.dem_part(50.5, 0.5).map(|(w, _)| w), None);
+        assert!(t.dem_part(45.0, 0.5).is_some_and(|(w, _)| w > 0.0 && w < 0.1));
+        assert_eq!(t.dem_part(0.0, 0.5).map(|(w, _)| w), Some(1.0));
     }
 }
