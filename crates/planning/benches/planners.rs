@@ -13,9 +13,8 @@
 //! Data files missing -> the group is skipped. Run: `cargo bench -p rovernav-planning`.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
-use pathfinding::directed::{astar::astar, dijkstra::dijkstra};
 use rovernav_core::data_file_or_skip;
-use rovernav_planning::baseline::{OrdCost, centre_successors, octile_heuristic};
+use rovernav_planning::baseline::pathfinding_cost;
 use rovernav_planning::benchmark::{run_grid_events, window_update};
 use rovernav_planning::movingai::{parse_map, parse_scenarios};
 use rovernav_planning::pgm::parse_cost_map;
@@ -82,15 +81,7 @@ fn versus_pathfinding(c: &mut Criterion, label: &str, grid: &CostGrid, queries: 
             AStar::dijkstra(GraphKind::CellCentres)
         };
         ours.set_grid(grid.clone());
-        let theirs = |s: Cell, g: Cell| {
-            let succ = |n: &Cell| centre_successors(grid, *n);
-            if informed {
-                astar(&s, succ, |n| octile_heuristic(*n, g), |n| *n == g)
-            } else {
-                dijkstra(&s, succ, |n| *n == g)
-            }
-            .map_or(f64::INFINITY, |(_, OrdCost(c))| c)
-        };
+        let theirs = |s: Cell, g: Cell| pathfinding_cost(grid, s, g, informed).unwrap_or(f64::INFINITY);
         let mut expansions = 0;
         for &(s, g) in queries {
             let plan = ours.plan(s, g).expect("solvable");

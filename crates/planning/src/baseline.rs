@@ -32,7 +32,7 @@ impl std::ops::Add for OrdCost {
     }
 }
 
-impl num_traits::Zero for OrdCost {
+impl pathfinding::num_traits::Zero for OrdCost {
     fn zero() -> Self {
         OrdCost(0.0)
     }
@@ -79,6 +79,23 @@ pub fn centre_successors(grid: &CostGrid, cell: Cell) -> Vec<(Cell, OrdCost)> {
     out
 }
 
+/// The cost of the path the `pathfinding` crate finds from `start` to `goal` on this graph: its
+/// A* with the octile heuristic (`informed`) or its Dijkstra; `None` without a path.
+pub fn pathfinding_cost(grid: &CostGrid, start: Cell, goal: Cell, informed: bool) -> Option<f64> {
+    let successors = |n: &Cell| centre_successors(grid, *n);
+    let found = if informed {
+        pathfinding::directed::astar::astar(
+            &start,
+            successors,
+            |n| octile_heuristic(*n, goal),
+            |n| *n == goal,
+        )
+    } else {
+        pathfinding::directed::dijkstra::dijkstra(&start, successors, |n| *n == goal)
+    };
+    found.map(|(_, OrdCost(c))| c)
+}
+
 /// The octile distance between two cells (the heuristic both searches use).
 pub fn octile_heuristic(a: Cell, b: Cell) -> OrdCost {
     OrdCost(crate::octile_distance(a.row.abs_diff(b.row), a.col.abs_diff(b.col)))
@@ -88,7 +105,7 @@ pub fn octile_heuristic(a: Cell, b: Cell) -> OrdCost {
 mod tests {
     use super::*;
     use crate::lattice::Lattice;
-    use crate::{GraphKind, octile_distance};
+    use crate::{AStar, GlobalPlanner, GraphKind, octile_distance};
 
     #[test]
     fn successors_are_the_lattice_edges() {
@@ -114,5 +131,23 @@ mod tests {
             }
         }
         assert_eq!(octile_heuristic(Cell::new(0, 0), Cell::new(3, 1)).0, octile_distance(3, 1));
+        // Both library searches agree with rovernav's A* and Dijkstra on every pair of cells.
+        let mut ours = [AStar::new(GraphKind::CellCentres), AStar::dijkstra(GraphKind::CellCentres)];
+        for p in &mut ours {
+            p.set_grid(grid.clone());
+        }
+        let cells: Vec<Cell> = (0..4).flat_map(|r| (0..5).map(move |c| Cell::new(r, c))).collect();
+        for &s in &cells {
+            // rovernav's planners refuse a blocked start or goal (even when they coincide).
+            for &t in cells.iter().filter(|&&t| !grid.is_blocked(s) && !grid.is_blocked(t)) {
+                for (p, informed) in ours.iter_mut().zip([true, false]) {
+                    let theirs = pathfinding_cost(&grid, s, t, informed);
+                    match p.plan(s, t) {
+                        Ok(plan) => assert!((plan.cost - theirs.unwrap()).abs() < 1e-12, "{s:?}->{t:?}"),
+                        Err(_) => assert_eq!(theirs, None, "{s:?}->{t:?}"),
+                    }
+                }
+            }
+        }
     }
 }

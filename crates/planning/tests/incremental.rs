@@ -4,41 +4,12 @@
 //! independent Dijkstra search written here from the edge-cost definition.
 
 use pathfinding::directed::dijkstra::dijkstra;
-use pathfinding::num_traits::Zero;
 use proptest::prelude::*;
+use rovernav_planning::baseline::OrdCost as Cost;
 use rovernav_planning::{Cell, CellChange, CostGrid, GlobalPlanner, PlanError, planner_by_name};
 use std::f64::consts::SQRT_2;
 
 const N: usize = 20;
-
-/// A totally ordered f64 for pathfinding's Dijkstra (costs here are finite and non-negative).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Cost(f64);
-impl Eq for Cost {}
-impl PartialOrd for Cost {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Cost {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
-}
-impl std::ops::Add for Cost {
-    type Output = Cost;
-    fn add(self, o: Cost) -> Cost {
-        Cost(self.0 + o.0)
-    }
-}
-impl Zero for Cost {
-    fn zero() -> Self {
-        Cost(0.0)
-    }
-    fn is_zero(&self) -> bool {
-        self.0 == 0.0
-    }
-}
 
 /// Optimal cell-centre cost: steps cost the mean of the two cells' costs times the length,
 /// diagonals need both side cells free.

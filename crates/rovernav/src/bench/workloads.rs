@@ -5,13 +5,12 @@
 use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, meijster, random_occupancy};
 use super::report::{Row, alternate};
 use anyhow::{Context, anyhow, ensure};
-use pathfinding::directed::{astar::astar, dijkstra::dijkstra};
 use rovernav_executive::{Mission, Run};
 use rovernav_localization::benchmark::{
     MatcherWorkload, compare, localisation_workload, scan_window_workload,
 };
 use rovernav_localization::matching::distance_transform::squared_distance_3d;
-use rovernav_planning::baseline::{OrdCost, centre_successors, octile_heuristic};
+use rovernav_planning::baseline::pathfinding_cost;
 use rovernav_planning::benchmark::window_update;
 use rovernav_planning::pgm::parse_cost_map;
 use rovernav_planning::{AStar, Cell, CostGrid, DStarLite, FieldDStar, GlobalPlanner, GraphKind};
@@ -48,15 +47,7 @@ pub fn graph_search(grid: &CostGrid, reps: usize) -> anyhow::Result<Vec<Row>> {
             AStar::dijkstra(GraphKind::CellCentres)
         };
         ours.set_grid(grid.clone());
-        let theirs = || {
-            let succ = |n: &Cell| centre_successors(grid, *n);
-            if informed {
-                astar(&s, succ, |n| octile_heuristic(*n, t), |n| *n == t)
-            } else {
-                dijkstra(&s, succ, |n| *n == t)
-            }
-            .map_or(f64::INFINITY, |(_, OrdCost(c))| c)
-        };
+        let theirs = || pathfinding_cost(grid, s, t, informed).unwrap_or(f64::INFINITY);
         let (times, plan, base) = alternate(reps, || ours.plan(s, t), theirs);
         let plan = plan.map_err(|e| anyhow!("map1000: {e}"))?;
         ensure!(
