@@ -90,16 +90,32 @@ fn metres_after(text: &str, after: &str) -> f64 {
 fn a_drive_toward_a_rock_is_answered_with_the_proximity_stop_and_how_far_it_went() {
     // A 0.3 m rock 1.4 m ahead of the rover's centre: within a metre's drive, beyond the
     // proximity sensors' 0.6 m at the start.
-    let script = [(0, "mission pause"), (0, "drive 1"), (1, "mission abort"), (1, "drive 1"), (1, "status")];
+    let script = [
+        (0, "mission pause"),
+        (0, "drive 1"),
+        (1, "place 3.4 2.0"),
+        (1, "mission abort"),
+        (1, "drive 1"),
+        (1, "status"),
+    ];
     let (op, log, start, outcome) = run(Some([3.4, 2.0]), &script);
     assert_eq!(outcome, "aborted");
     assert!(matches!(log.cycles[0].0, NavCommand::Drive { .. }), "{:?}", log.cycles[0].0);
     let answer = op.reply_containing("`drive 1` stopped").unwrap_or_else(|| panic!("{:?}", op.replies));
     assert!(answer.contains("the proximity guard tripped"), "{answer}");
+    assert!(answer.contains("middle sensors"), "the rock is straight ahead: {answer}");
     let said = metres_after(answer, "stopped after ");
     let truth = true_step(&log, start, 0);
     assert!(truth > 0.05 && truth < 0.9, "the guard stopped the rover after {truth:.3} m in truth");
     assert!((said - truth).abs() < 0.05, "answered {said} m, true {truth:.3} m: {answer}");
+    eprintln!("{answer} (true {truth:.3} m)");
+    // The queued placement never ran (the mission was paused): its end says so.
+    let task = op.reply_containing("not done").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(
+        task.starts_with("task 2 (place")
+            && task.ends_with("not done: mission over: aborted (mission aborted by the operator)"),
+        "{task}"
+    );
     // Commands after the end are answered, not dropped; `status` still works.
     let over: Vec<&String> = op.replies.iter().filter(|r| r.starts_with("mission over: aborted")).collect();
     assert_eq!(over.len(), 1, "{:?}", op.replies);

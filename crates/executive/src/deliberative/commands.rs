@@ -110,6 +110,7 @@ impl Deliberative {
             (self.cursor + 1).min(self.tasks.len())
         };
         self.tasks.insert(at, task);
+        self.operator_tasks.push(id);
         format!("task {id} added: {}", kind.describe())
     }
 

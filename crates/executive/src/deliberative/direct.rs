@@ -1,7 +1,8 @@
 //! The operator's direct motions (`drive`, `turn`) followed to their end: each is answered once
 //! the platform has executed it, with its completion or the reason it stopped (the guard that
 //! tripped, a hazard contact, a stall) and how far it went, or with why it never ran (an
-//! emergency stop, the mission's end).
+//! emergency stop, the mission's end). Tasks the operator queued (`place`, `track`) are answered
+//! likewise when they end: their final state and its message.
 //!
 //! How far is judged from the pose estimate (before the command and after the estimator has
 //! integrated the command's frame), never from the simulator's truth, which the autonomy does
@@ -62,7 +63,17 @@ impl Deliberative {
     pub(super) fn direct_frame(&mut self, f: &FrameMsg) {
         let Some(r) = f.request().filter(|r| r.origin == Origin::Operator) else { return };
         if let Some(d) = self.direct.iter_mut().find(|d| d.id == r.id && d.executed.is_none()) {
-            d.executed = Some((f.seq, f.motion_stopped.clone()));
+            let p = &f.proximity;
+            let sides: Vec<&str> = [(p.left(), "left"), (p.middle(), "middle"), (p.right(), "right")]
+                .into_iter()
+                .filter_map(|(on, side)| on.then_some(side))
+                .collect();
+            // Where the proximity guard saw something: the sensor clusters that triggered.
+            let why = f.motion_stopped.as_ref().map(|w| match w.contains("proximity") && !sides.is_empty() {
+                true => format!("{w}, {} sensors", sides.join(" and ")),
+                false => w.clone(),
+            });
+            d.executed = Some((f.seq, why));
         }
     }
 
@@ -89,6 +100,27 @@ impl Deliberative {
             };
             bus.publish(topics::OPERATOR_REPLY, text)?;
         }
+        Ok(())
+    }
+
+    /// Answers every task the operator queued that has ended; with `over` (the mission's end),
+    /// every other one too, as not done.
+    pub(super) fn answer_tasks(&mut self, bus: &mut Bus, over: Option<&str>) -> Result<(), BusError> {
+        let mut waiting = Vec::new();
+        for id in std::mem::take(&mut self.operator_tasks) {
+            let Some(t) = self.tasks.iter().find(|t| t.id == id) else { continue };
+            let text = if t.state.is_final() {
+                let message = if t.message.is_empty() { String::new() } else { format!(": {}", t.message) };
+                format!("task {id} ({}) {}{message}", t.kind.describe(), t.state.as_str())
+            } else if let Some(why) = over {
+                format!("task {id} ({}) not done: {why}", t.kind.describe())
+            } else {
+                waiting.push(id);
+                continue;
+            };
+            bus.publish(topics::OPERATOR_REPLY, text)?;
+        }
+        self.operator_tasks = waiting;
         Ok(())
     }
 }

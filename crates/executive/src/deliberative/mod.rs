@@ -106,6 +106,8 @@ pub struct Deliberative {
     area: Option<[f64; 4]>,
     /// The operator's direct motions not answered yet.
     direct: Vec<direct::DirectMotion>,
+    /// Tasks the operator queued whose end has not been answered yet.
+    operator_tasks: Vec<u64>,
 }
 
 impl Deliberative {
@@ -158,6 +160,7 @@ impl Deliberative {
             last_navcam: None,
             area: None,
             direct: Vec::new(),
+            operator_tasks: Vec::new(),
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -330,7 +333,7 @@ impl Deliberative {
             task.message = s.message.clone();
             task.outcome = s.outcome.clone();
         }
-        Ok(())
+        self.answer_tasks(bus, None)
     }
 
     /// The tasks of the current step: the cursor's and those parallel to it.
@@ -412,7 +415,9 @@ impl Deliberative {
         self.fp.set_target(None);
         self.control(bus, None, ControlAction::Standby)?;
         self.state = MissionState::Finished;
-        self.abandon_direct(bus, &format!("mission over: {} ({why})", outcome.as_str()))?;
+        let over = format!("mission over: {} ({why})", outcome.as_str());
+        self.abandon_direct(bus, &over)?;
+        self.answer_tasks(bus, Some(&over))?;
         self.end = Some((outcome, why));
         Ok(())
     }

@@ -199,3 +199,31 @@ fn operator_errors_name_the_token_and_misplaced_commands_are_refused() {
     assert_eq!(dl.apply_line(&mut bus, "# just a comment").unwrap(), "");
     assert!(dl.apply_line(&mut bus, "help goto").unwrap().contains("goto X Y"));
 }
+
+#[test]
+fn a_task_the_operator_queued_is_answered_when_it_ends() {
+    let mut bus = Bus::in_process();
+    let drive_to = bus.subscribe(topics::EXECUTIVE_DRIVE_TO).unwrap();
+    let motion = bus.subscribe(topics::EXECUTIVE_MOTION).unwrap();
+    let arm = bus.subscribe(topics::ARM_COMMAND).unwrap();
+    let replies = bus.subscribe(topics::OPERATOR_REPLY).unwrap();
+    let mut dl = layer(&mut bus, &[]);
+    dl.step(&mut bus).unwrap();
+    let wp = bus.take(&drive_to).unwrap()[0].task;
+    let added = dl.apply_line(&mut bus, "place 5 6").unwrap();
+    assert!(added.starts_with("task 3 added"), "{added}");
+    status(&mut bus, wp, TaskState::Success, Some("reached"));
+    let at_wp = EstimateMsg { pose: PoseMsg { x: 5.0, y: 5.0, ..Default::default() }, ..Default::default() };
+    bus.publish(topics::LOCALIZATION_ESTIMATE, at_wp).unwrap();
+    dl.step(&mut bus).unwrap();
+    let turn = bus.take(&motion).unwrap();
+    status(&mut bus, turn[0].id, TaskState::Success, None);
+    dl.step(&mut bus).unwrap();
+    let deploy = bus.take(&arm).unwrap();
+    assert!(bus.take(&replies).unwrap().is_empty(), "nothing to answer while the arm works");
+    status(&mut bus, deploy[0].task, TaskState::Failure, None);
+    dl.step(&mut bus).unwrap();
+    let answers: Vec<String> = bus.take(&replies).unwrap().iter().map(|r| r.to_string()).collect();
+    assert_eq!(answers, ["task 3 (place_instrument (5.00, 6.00)) failure: Failure"]);
+    assert_eq!(dl.end().map(|e| e.0), Some(Outcome::HelpRequested), "and the failure ends the mission");
+}
