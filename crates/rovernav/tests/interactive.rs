@@ -52,6 +52,17 @@ fn a_paced_run_takes_its_simulated_time_over_the_speed_and_answers_every_command
         "{stdout}"
     );
     assert!(stdout.contains("mission over: aborted; `drive 1` not executed"), "{stdout}");
+    // The log holds the same answers: seven lines answered at once, four motions when they ran.
+    let bytes = std::fs::read(dir.join("out/telemetry.mcap")).unwrap();
+    let logged: Vec<String> = rovernav_telemetry::mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == "/bus/operator/reply")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect();
+    assert_eq!(logged.len(), 11, "{logged:?}");
+    assert!(logged.iter().all(|r| stdout.contains(r.as_str())), "{logged:?}\n{stdout}");
+    assert!(logged.last().unwrap().starts_with("mission over: aborted"), "{logged:?}");
 }
 
 #[test]
