@@ -20,7 +20,11 @@
 //! formula's precision diverges there); outliers are points whose error exceeds five robust
 //! standard deviations of the errors normalised by their predictions, counted apart. The
 //! combined profile (figure 5) bins points by distance from the landing site and combines the
-//! pairs by inverse variance, predicted and measured alike.
+//! pairs by inverse variance, predicted and measured alike. `localisation`: the rover matched
+//! against the descent DEM at `--fix-distances` ([`fix`]).
+
+#[path = "eval_descent_fix.rs"]
+mod fix;
 
 use anyhow::Context;
 use rovernav_core::{Grid2, GridGeometry};
@@ -65,6 +69,9 @@ pub struct EvalDescentArgs {
     /// Fractal terrain only, without the Gale DEM at the landing site.
     #[arg(long)]
     pub no_dem: bool,
+    /// Distances from the landing site where the rover localises against the descent DEM (m).
+    #[arg(long, value_delimiter = ',', default_value = "100,500,1000")]
+    pub fix_distances: Vec<f64>,
     /// Print the figures as JSON.
     #[arg(long)]
     pub json: bool,
@@ -129,6 +136,8 @@ pub struct DescentEvaluation {
     pub agreement_at_matching_sigma: f64,
     /// Combined precision against distance from the landing site.
     pub profile: Vec<ProfileBin>,
+    /// The rover localised against the descent DEM.
+    pub localisation: Vec<fix::DescentFix>,
 }
 
 /// A used point: distance from the landing site, error, predicted sigma, pair index.
@@ -148,6 +157,11 @@ pub fn run(args: EvalDescentArgs) -> anyhow::Result<()> {
         args.top_altitude.is_finite() && (50.0..=50_000.0).contains(&args.top_altitude),
         "--top-altitude: {} is outside 50..50000 m",
         args.top_altitude
+    );
+    anyhow::ensure!(
+        args.fix_distances.iter().all(|d| d.is_finite() && (0.0..=5000.0).contains(d)),
+        "--fix-distances: {:?} must lie within 0..5000 m",
+        args.fix_distances
     );
     anyhow::ensure!(
         args.drift.is_finite() && (0.0..=0.2).contains(&args.drift),
@@ -174,7 +188,8 @@ pub fn run(args: EvalDescentArgs) -> anyhow::Result<()> {
         drift_fraction: args.drift,
         ..Default::default()
     };
-    let evaluation = evaluate(&terrain, &plan, args.seed, args.matching_precision, !args.no_dem);
+    let evaluation =
+        evaluate(&terrain, &plan, args.seed, args.matching_precision, !args.no_dem, &args.fix_distances);
     crate::output::print_evaluation(args.json, &evaluation, print_table)
 }
 
@@ -185,12 +200,16 @@ pub fn evaluate(
     seed: u64,
     precision_px: f64,
     gale_dem: bool,
+    fix_distances: &[f64],
 ) -> DescentEvaluation {
     let images = render_sequence(terrain, plan, seed);
     let f = plan.focal_px();
     let mut prior: Option<(Grid2<f32>, f64)> = None;
     let mut pairs = Vec::new();
     let mut scored = Vec::new();
+    // Every triangulated point with the formula's precision at its pair's matching error.
+    let mut dem_points: Vec<[f64; 4]> = Vec::new();
+    let mut priors = Vec::new();
     for (k, w) in images.windows(2).enumerate() {
         let (va, vb) = (view(&w[0], plan.size), view(&w[1], plan.size));
         let height = |x: f64, y: f64| match &prior {
@@ -200,6 +219,7 @@ pub fn evaluate(
             None => 0.0,
         };
         let matches = match_pair((&va, &w[0].camera), (&vb, &w[1].camera), &height, &MatchParams::default());
+        priors.push(prior.clone());
         let (figures, points) = score_pair(terrain, &w[0], &w[1], &matches, f, precision_px, plan.size, k);
         // The next pair searches around this pair's elevations.
         let cell = 16.0 * w[0].pixel_m;
@@ -213,6 +233,10 @@ pub fn evaluate(
         let mut zs: Vec<f64> = matches.iter().map(|m| m.point[2]).collect();
         let level = median(&mut zs);
         prior = level.is_finite().then(|| (elevation_grid(&cloud, geometry), level));
+        dem_points.extend(matches.iter().map(|m| {
+            let [x, y, z] = m.point;
+            [x, y, z, m.predicted_sigma(figures.matching_sigma_px, f)]
+        }));
         pairs.push(figures);
         scored.extend(points);
     }
@@ -221,6 +245,14 @@ pub fn evaluate(
         .iter()
         .map(|p| p.measured_sigma_m / p.predicted_at_matching_sigma_m)
         .filter(|r| r.is_finite())
+        .collect();
+    let localisation = fix_distances
+        .iter()
+        .map(|&d| {
+            let mut points = dem_points.clone();
+            points.extend(dense_points(&images, &priors, &pairs, d, seed, f));
+            fix::fix(terrain, &points, d, seed)
+        })
         .collect();
     DescentEvaluation {
         size: plan.size,
@@ -231,7 +263,63 @@ pub fn evaluate(
         pairs,
         agreement_factor: median(&mut ratios),
         agreement_at_matching_sigma: median(&mut at_matching),
+        localisation,
     }
+}
+
+/// Every upper pixel matched around the rover's dead-reckoned position at `distance`, in the
+/// lowest pair whose lower image sees the matcher's whole reach (`[x, y, z, sigma]`, sigma from
+/// the formula at the pair's measured matching error); empty when no pair does.
+fn dense_points(
+    images: &[DescentImage],
+    priors: &[Option<(Grid2<f32>, f64)>],
+    pairs: &[PairFigures],
+    distance: f64,
+    seed: u64,
+    f: f64,
+) -> Vec<[f64; 4]> {
+    let (_, _, dr) = fix::position(distance, seed);
+    let r = fix::REACH_M + 2.0;
+    let corners = [(-r, -r), (r, -r), (r, r), (-r, r)];
+    let sees = |cam: &rovernav_vision::Cahv| {
+        corners.iter().all(|&(dx, dy)| {
+            cam.project(&nalgebra::Point3::new(dr.x + dx, dr.y + dy, 0.0)).is_some_and(|p| {
+                let m = 0.1 * cam.width as f64;
+                p.x > m && p.y > m && p.x < cam.width as f64 - m && p.y < cam.height as f64 - m
+            })
+        })
+    };
+    let Some(k) = (0..images.len().saturating_sub(1)).rev().find(|&k| sees(&images[k + 1].camera)) else {
+        return Vec::new();
+    };
+    let (up, lo) = (&images[k], &images[k + 1]);
+    let pixels: Vec<_> = corners
+        .iter()
+        .filter_map(|&(dx, dy)| up.camera.project(&nalgebra::Point3::new(dr.x + dx, dr.y + dy, 0.0)))
+        .collect();
+    let bound = |v: f64| v.max(0.0) as usize;
+    let region = [
+        bound(pixels.iter().map(|p| p.x).fold(f64::INFINITY, f64::min)),
+        bound(pixels.iter().map(|p| p.y).fold(f64::INFINITY, f64::min)),
+        bound(pixels.iter().map(|p| p.x).fold(0.0, f64::max).ceil()),
+        bound(pixels.iter().map(|p| p.y).fold(0.0, f64::max).ceil()),
+    ];
+    let height = |x: f64, y: f64| match &priors[k] {
+        Some((grid, fallback)) => {
+            grid.at_world(x, y).map(|&v| v as f64).filter(|v| v.is_finite()).unwrap_or(*fallback)
+        }
+        None => 0.0,
+    };
+    let size = up.camera.width;
+    let params = MatchParams { cell_px: 1, region: Some(region), ..Default::default() };
+    let matches = match_pair((&view(up, size), &up.camera), (&view(lo, size), &lo.camera), &height, &params);
+    matches
+        .iter()
+        .map(|m| {
+            let [x, y, z] = m.point;
+            [x, y, z, m.predicted_sigma(pairs[k].matching_sigma_px, f)]
+        })
+        .collect()
 }
 
 /// An image as the matcher's view.
@@ -387,6 +475,22 @@ fn print_table(e: &DescentEvaluation) {
             b.distance_m[0], b.distance_m[1], b.pairs, b.predicted_sigma_m, b.measured_sigma_m, b.points
         );
     }
+    println!(
+        "  rover against the descent DEM: distance (m)  DEM cell (m)  DEM RMS (m)  error (m)  dead reckoning (m)  P(false)"
+    );
+    for x in &e.localisation {
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+        println!(
+            "  {:>10.0}  {:>12.0}  {:>11.3}  {:>9}  {:>18.3}  {:>8}  {}",
+            x.distance_m,
+            x.reference_cell_m,
+            x.reference_rms_m,
+            opt(x.error_m),
+            x.dead_reckoning_error_m,
+            opt(x.failure_probability),
+            x.failure.as_deref().unwrap_or("")
+        );
+    }
 }
 
 #[cfg(test)]
@@ -396,7 +500,7 @@ mod tests {
     #[test]
     fn measured_precision_follows_the_formula_at_the_measured_matching_precision() {
         let plan = DescentPlan { top_altitude_m: 400.0, images: 3, size: 200, ..Default::default() };
-        let e = evaluate(&DescentTerrain::procedural(5), &plan, 5, 0.1, false);
+        let e = evaluate(&DescentTerrain::procedural(5), &plan, 5, 0.1, false, &[]);
         assert_eq!(e.pairs.len(), 2);
         for p in &e.pairs {
             assert!(p.used >= 50, "{p:?}");

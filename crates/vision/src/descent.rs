@@ -114,6 +114,8 @@ pub struct MatchParams {
     pub blur_px: f64,
     /// Least normalised cross-correlation of an accepted match.
     pub min_ncc: f64,
+    /// Upper-image pixels to match, `[x0, y0, x1, y1]` (exclusive ends); `None` for all.
+    pub region: Option<[usize; 4]>,
     /// Least smaller structure-tensor eigenvalue per window pixel, relative to the image's
     /// mean squared intensity (rejects textureless points).
     pub min_texture: f64,
@@ -121,7 +123,15 @@ pub struct MatchParams {
 
 impl Default for MatchParams {
     fn default() -> Self {
-        Self { cell_px: 8, half_window: 7, search_px: 12, blur_px: 1.0, min_ncc: 0.8, min_texture: 1e-5 }
+        Self {
+            cell_px: 8,
+            half_window: 7,
+            search_px: 12,
+            blur_px: 1.0,
+            min_ncc: 0.8,
+            region: None,
+            min_texture: 1e-5,
+        }
     }
 }
 
@@ -174,8 +184,10 @@ pub fn match_pair<C: CameraModel>(
     let cell = params.cell_px.max(1);
     let centre = Point2::new(0.5 * (up.width as f64 - 1.0), 0.5 * (up.height as f64 - 1.0));
     let axis = up_cam.unproject(&centre).direction.into_inner();
+    let [x0, y0, x1, y1] = params.region.unwrap_or([0, 0, up.width, up.height]);
+    let (x1, y1) = (x1.min(up.width), y1.min(up.height));
     let cells: Vec<(usize, usize)> =
-        (0..up.height / cell).flat_map(|cy| (0..up.width / cell).map(move |cx| (cx, cy))).collect();
+        (y0 / cell..y1 / cell).flat_map(|cy| (x0 / cell..x1 / cell).map(move |cx| (cx, cy))).collect();
     cells
         .par_iter()
         .filter_map(|&(cx, cy)| {
