@@ -10,12 +10,15 @@ use rovernav_executive::{
     CycleRecord, Mission, Run, RunObserver, RunOptions, RunSettings, ScriptedOperator, build_world,
 };
 
-/// A flat 8 m yard without rocks, the rover at (2, 2) facing east (+x), the goal far away.
-fn mission() -> Mission {
-    let text = "name = \"operator-replies\"\nseed = 4\n[terrain]\nkind = \"procedural\"\nsize_m = 8.0\n\
-                resolution_m = 0.02\nrock_abundance = 0.0\nrelief_m = 0.03\n[start]\nx = 2.0\ny = 2.0\n\
-                yaw_deg = 0.0\n[goal]\nx = 6.5\ny = 6.5\n";
-    Mission::from_toml(text, "operator-replies").expect("valid mission")
+/// A flat 8 m yard without rocks, the rover at (2, 2) facing east (+x), the goal far away;
+/// `extra` is appended to the mission text.
+fn mission(extra: &str) -> Mission {
+    let text = format!(
+        "name = \"operator-replies\"\nseed = 4\n[terrain]\nkind = \"procedural\"\nsize_m = 8.0\n\
+         resolution_m = 0.02\nrock_abundance = 0.0\nrelief_m = 0.03\n[start]\nx = 2.0\ny = 2.0\n\
+         yaw_deg = 0.0\n[goal]\nx = 6.5\ny = 6.5\n{extra}"
+    );
+    Mission::from_toml(&text, "operator-replies").expect("valid mission")
 }
 
 /// Every executed command with the true pose after it, and the operator's answers on the bus.
@@ -44,8 +47,16 @@ impl RunObserver for Log {
 
 /// Runs the mission with a 0.3 m rock of radius `rock_radius` centred at `rock` (if any).
 fn run(rock: Option<[f64; 2]>, script: &[(u64, &str)]) -> (ScriptedOperator, Log, Pose3, String) {
-    let m = mission();
-    let mut world = build_world(&m, "test").unwrap();
+    run_mission(&mission(""), rock, script)
+}
+
+/// [`run`] on mission `m`.
+fn run_mission(
+    m: &Mission,
+    rock: Option<[f64; 2]>,
+    script: &[(u64, &str)],
+) -> (ScriptedOperator, Log, Pose3, String) {
+    let mut world = build_world(m, "test").unwrap();
     if let Some([cx, cy]) = rock {
         let dem = &mut world.terrain.dem;
         let g = *dem.geometry();
@@ -60,10 +71,10 @@ fn run(rock: Option<[f64; 2]>, script: &[(u64, &str)]) -> (ScriptedOperator, Log
         }
     }
     let start = world.start;
-    let options = RunOptions::of(&m, &world);
+    let options = RunOptions::of(m, &world);
     let mut op = ScriptedOperator::new(script);
     let mut log = Log::default();
-    let out = Run::new(world, RunSettings::of(&m))
+    let out = Run::new(world, RunSettings::of(m))
         .options(options)
         .observer(&mut log)
         .operator(&mut op)
@@ -119,7 +130,7 @@ fn a_drive_toward_a_rock_is_answered_with_the_proximity_stop_and_how_far_it_went
     // Commands after the end are answered, not dropped; `status` still works.
     let over: Vec<&String> = op.replies.iter().filter(|r| r.starts_with("mission over: aborted")).collect();
     assert_eq!(over.len(), 1, "{:?}", op.replies);
-    assert!(over[0].contains("`drive 1` not executed"), "{}", over[0]);
+    assert_eq!(over[0], "mission over: aborted (mission aborted by the operator); `drive 1` not executed");
     assert!(op.replies.last().unwrap().starts_with("mission over · "), "{:?}", op.replies);
     // The log carries the same answers, in the same order.
     assert_eq!(log.replies, op.replies);
@@ -145,4 +156,20 @@ fn an_unobstructed_drive_and_a_turn_are_answered_completed_with_what_they_did() 
         turned.to_degrees()
     );
     assert_eq!(log.replies, op.replies);
+}
+
+#[test]
+fn a_stall_during_a_drive_is_answered_with_the_stall_and_the_fault_that_ended_the_mission() {
+    let m = mission("[[faults]]\nkind = \"stalled_wheel\"\nside = \"left\"\nat_cycle = 1\n");
+    let script = [(0, "mission pause"), (0, "drive 1"), (1, "drive 1")];
+    let (op, log, start, outcome) = run_mission(&m, None, &script);
+    assert_eq!(outcome, "help_requested", "{:?}", op.replies);
+    let answer = op.reply_containing("`drive 1` stopped").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(answer.contains("the wheels stalled (stall: left wheels"), "{answer}");
+    let (said, truth) = (metres_after(answer, "stopped after "), true_step(&log, start, 0));
+    assert!(truth < 0.9 && (said - truth).abs() < 0.1, "answered {said} m, true {truth:.3} m: {answer}");
+    // The second drive, accepted as the fault was diagnosed, is answered with the fault.
+    let over = op.reply_containing("not executed").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(over.contains("mission over: help_requested (fault protection (stuck_wheel)"), "{over}");
+    assert_eq!(log.cycles.len(), 1, "the second drive never ran");
 }

@@ -51,7 +51,10 @@ fn a_paced_run_takes_its_simulated_time_over_the_speed_and_answers_every_command
         stdout.contains("`drive 1` completed: ") || stdout.contains("`drive 1` stopped after "),
         "{stdout}"
     );
-    assert!(stdout.contains("mission over: aborted; `drive 1` not executed"), "{stdout}");
+    assert!(
+        stdout.contains("mission over: aborted (mission aborted by the operator); `drive 1` not executed"),
+        "{stdout}"
+    );
     // The log holds the same answers: seven lines answered at once, four motions when they ran.
     let bytes = std::fs::read(dir.join("out/telemetry.mcap")).unwrap();
     let logged: Vec<String> = rovernav_telemetry::mcap::MessageStream::new(&bytes)

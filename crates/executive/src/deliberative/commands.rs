@@ -23,8 +23,8 @@ impl Deliberative {
         if self.state == MissionState::Finished
             && !matches!(cmd, C::Status | C::Help { .. } | C::WaypointList)
         {
-            let outcome = self.end.as_ref().map_or("over", |(o, _)| o.as_str());
-            return Ok(format!("mission over: {outcome}; `{cmd}` not executed"));
+            let (outcome, why) = self.end.as_ref().map_or(("over", ""), |(o, why)| (o.as_str(), why));
+            return Ok(format!("mission over: {outcome} ({why}); `{cmd}` not executed"));
         }
         let target = match &cmd {
             C::Goto { x, y }
