@@ -136,11 +136,6 @@ impl SimPlatform {
         &self.injected
     }
 
-    /// Commands executed so far.
-    pub fn executed_count(&self) -> u64 {
-        self.executed_count
-    }
-
     /// Injects the faults whose trigger has come, given the number of the next command.
     fn inject_due(&mut self, next_command: u64) {
         let time = self.sim.time();
