@@ -145,8 +145,12 @@ fn outcome_text(d: &DirectMotion, end: &Pose3) -> String {
     };
     match stopped {
         Some(why) => {
-            format!("`{}` stopped after {done} of {asked}: {} ({why}; estimate)", d.text, stop_cause(why))
+            format!(
+                "`{}` stopped after {done} of {asked}: {} ({why}; by the pose estimate)",
+                d.text,
+                stop_cause(why)
+            )
         }
-        None => format!("`{}` completed: {done} (estimate)", d.text),
+        None => format!("`{}` completed: {done} by the pose estimate", d.text),
     }
 }
