@@ -129,6 +129,9 @@ pub struct Scoring {
     pub truth: Vec<PoseMsg>,
     /// Cells of the sensed-area grid covered by range data, as `[col, row]` (picture only).
     pub sensed: Vec<[u32; 2]>,
+    /// The faults the simulator injected (`[[faults]]`), with the true contacts after each.
+    #[serde(default)]
+    pub injected_faults: Vec<crate::report::InjectedFaultReport>,
 }
 
 /// Why a link exchange failed.
@@ -258,7 +261,10 @@ impl PlatformServer {
 
     fn score(&mut self, goal: Point2, estimate: Pose3) -> Scoring {
         self.world.goal.position = goal;
-        self.scorer.scoring(&self.world, self.platform.sim(), estimate)
+        let mut scoring = self.scorer.scoring(&self.world, self.platform.sim(), estimate);
+        scoring.injected_faults =
+            crate::run_loop::fault_reports(self.platform.injected_faults(), scoring.hazard_contacts);
+        scoring
     }
 }
 

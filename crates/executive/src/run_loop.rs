@@ -215,6 +215,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         platform_s: runtime.busy_s("platform"),
     };
     let message = crate::report::run_message(outcome, &message, scoring.goal_error_m);
+    let injected = injected_faults(&runtime, &crashed, &scoring, remote);
     let report = Report {
         outcome: outcome.as_str().into(),
         message,
@@ -235,7 +236,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         hazard_events: scoring.hazard_events,
         compute_per_cycle: per_cycle(spent, cycles),
         localization_stats: Some(estimator(&runtime).localizer_stats().into()),
-        injected_faults: injected_faults(&runtime, crashed, scoring.hazard_contacts, remote),
+        injected_faults: injected,
         ..executive_outcome(&runtime, &deliberative)
     };
     observer.on_finish(&report, &trace);
@@ -388,19 +389,29 @@ fn inject_due_crashes(
 /// true hazard contacts after each.
 fn injected_faults(
     runtime: &Runtime,
-    crashed: Vec<InjectedFault>,
-    contacts: u32,
+    crashed: &[InjectedFault],
+    scoring: &crate::remote::Scoring,
     remote: bool,
 ) -> Vec<InjectedFaultReport> {
-    let mut all = crashed;
-    if !remote {
-        all.extend(sim_platform(runtime).injected_faults().iter().cloned());
+    let mut all = fault_reports(crashed, scoring.hazard_contacts);
+    if remote {
+        // The simulator process injected the platform's faults and reports them.
+        all.extend(scoring.injected_faults.iter().cloned());
+    } else {
+        all.extend(fault_reports(sim_platform(runtime).injected_faults(), scoring.hazard_contacts));
     }
     all.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-    all.into_iter()
+    all
+}
+
+/// Injected faults as the report gives them, with the true hazard contacts after each (of
+/// `contacts` at the end).
+pub(crate) fn fault_reports(faults: &[InjectedFault], contacts: u32) -> Vec<InjectedFaultReport> {
+    faults
+        .iter()
         .map(|f| InjectedFaultReport {
             kind: f.kind.into(),
-            component: f.component,
+            component: f.component.clone(),
             time_s: f.time_s,
             hazard_contacts_after: contacts.saturating_sub(f.hazard_contacts_before),
         })

@@ -88,6 +88,7 @@ impl Scorer {
             cycles: self.cycles,
             truth: Vec::new(),
             sensed: Vec::new(),
+            injected_faults: Vec::new(),
         }
     }
 
