@@ -11,7 +11,9 @@ mod sky;
 mod tasks;
 mod terrain;
 
-pub use faults::{DEFAULT_GYRO_JUMP_DEG_S, FaultKindName, FaultSpec, SensorName, Side, check as check_faults};
+pub use faults::{
+    DEFAULT_GYRO_JUMP_DEG_S, FaultKindName, FaultSpec, SensorName, Side, check as check_faults,
+};
 pub use route::{GoalSpec, PoseSpec};
 pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
 pub use sky::{SkyKind, SkySpec};
