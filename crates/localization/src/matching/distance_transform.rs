@@ -1,49 +1,96 @@
-//! Exact Euclidean distance transform of a 3D occupancy grid (Felzenszwalb and Huttenlocher's
-//! lower envelope of parabolas, applied separably along each axis).
+//! Exact Euclidean distance transform of a 3D occupancy grid.
 //!
 //! Paper 000 section 4.1 measures, for each occupied cell of the local map, the distance to the
 //! closest occupied cell of the global map; the transform tabulates that distance for every
 //! voxel of the global map once, so that scoring a pose is one lookup per local cell.
 //! Squared distances are in voxel units and saturate at a cap: a capped value means "at least
 //! the cap", which is all the likelihood needs (beyond it the inlier term is negligible).
+//!
+//! The algorithm is Meijster, Roerdink and Hesselink's separable exact transform ("A general
+//! algorithm for computing distance transforms in linear time", 2000): per layer, the distance
+//! to the nearest occupied cell of the same column (their first phase, two sweeps), then per
+//! row the lower envelope of the parabolas `(x - i)^2 + g(i)^2` (their second phase), then the
+//! same envelope along the layers. Departures, each for speed with identical outputs:
+//! - the first phase sweeps row by row over all columns at once, so it reads and writes memory
+//!   contiguously (the paper scans each column top to bottom);
+//! - the envelopes compare intersection points as exact integer fractions (cross-multiplied,
+//!   as in Felzenszwalb and Huttenlocher's formulation, Theory of Computing 8, 2012, section
+//!   2.1) instead of the paper's integer division `Sep`, so no cell pays for a division;
+//! - values are capped early: column distances saturate at `ceil(sqrt(cap))` (stored as
+//!   `u16`), and a parabola whose apex is already at the cap is left out of the envelope,
+//!   since it can only produce values at or above the cap;
+//! - the layer pass gathers blocks of [`LAYER_BLOCK`] neighbouring cells across all layers
+//!   (contiguous runs of each layer) rather than one strided column at a time.
 
-/// One-dimensional squared-distance transform of a sampled function: `out[q] = min_p f[p] +
-/// (q - p)^2`. `hull` and `bounds` are scratch buffers of at least `f.len()` and `f.len() + 1`.
-pub fn squared_distance_1d(f: &[f64], out: &mut [f64], hull: &mut [usize], bounds: &mut [f64]) {
+/// Cells per block of the layer pass: each layer is read and written in runs of this many.
+const LAYER_BLOCK: usize = 256;
+
+/// Reusable buffers for [`envelope`]: the hull's apexes and the left ends of their intervals.
+#[derive(Default)]
+struct Hull {
+    /// Position of each parabola on the hull.
+    at: Vec<usize>,
+    /// Its apex value.
+    apex: Vec<i64>,
+    /// Left end of its interval as a fraction `num / den` (`den > 0`).
+    num: Vec<i64>,
+    /// Denominator of `num`.
+    den: Vec<i64>,
+}
+
+/// One-dimensional lower envelope: `out[x] = min(cap, min_i f[i] + (x - i)^2)`, skipping
+/// parabolas whose apex `f[i]` is at or above `cap`.
+fn envelope(f: &[u32], cap: u32, out: &mut [u16], hull: &mut Hull) {
     let n = f.len();
-    if n == 0 {
+    for v in [&mut hull.apex, &mut hull.num, &mut hull.den] {
+        v.resize(n, 0);
+    }
+    hull.at.resize(n, 0);
+    let (at, apex, num, den) = (&mut hull.at[..], &mut hull.apex[..], &mut hull.num[..], &mut hull.den[..]);
+    // `top` is the hull's length.
+    let mut top = 0usize;
+    for (q, &fq) in f.iter().enumerate() {
+        if fq >= cap {
+            continue;
+        }
+        let a = i64::from(fq) + (q * q) as i64;
+        loop {
+            if top == 0 {
+                at[0] = q;
+                apex[0] = a;
+                top = 1;
+                break;
+            }
+            let k = top - 1;
+            // Intersection with the hull's last parabola: s = (a - apex[k]) / (2 (q - at[k])).
+            let (sn, sd) = (a - apex[k], 2 * (q - at[k]) as i64);
+            // Its interval starts at num[k] / den[k]; s at or before that hides it.
+            if k > 0 && sn * den[k] <= num[k] * sd {
+                top -= 1;
+                continue;
+            }
+            at[top] = q;
+            apex[top] = a;
+            num[top] = sn;
+            den[top] = sd;
+            top += 1;
+            break;
+        }
+    }
+    if top == 0 {
+        out.fill(cap as u16);
         return;
     }
     let mut k = 0usize;
-    hull[0] = 0;
-    bounds[0] = f64::NEG_INFINITY;
-    bounds[1] = f64::INFINITY;
-    for q in 1..n {
-        let fq = f[q] + (q * q) as f64;
-        let mut s;
-        loop {
-            let p = hull[k];
-            s = (fq - (f[p] + (p * p) as f64)) / (2.0 * (q - p) as f64);
-            // bounds[0] is -inf, so this stops at k == 0 at the latest.
-            if s <= bounds[k] {
-                k -= 1;
-            } else {
-                break;
-            }
-        }
-        k += 1;
-        hull[k] = q;
-        bounds[k] = s;
-        bounds[k + 1] = f64::INFINITY;
-    }
-    k = 0;
-    for (q, o) in out.iter_mut().enumerate().take(n) {
-        while bounds[k + 1] < q as f64 {
+    for (x, o) in out.iter_mut().enumerate() {
+        let xi = x as i64;
+        while k + 1 < top && num[k + 1] < xi * den[k + 1] {
             k += 1;
         }
-        let p = hull[k];
-        let d = q as f64 - p as f64;
-        *o = d * d + f[p];
+        let p = at[k];
+        let d = xi - p as i64;
+        let v = d * d + apex[k] - (p * p) as i64;
+        *o = v.min(i64::from(cap)) as u16;
     }
 }
 
@@ -62,37 +109,73 @@ pub fn squared_distances(
     layers: usize,
     cap: u16,
 ) -> (Vec<u16>, Vec<u16>) {
-    let cap_f = f64::from(cap);
-    let mut field: Vec<f64> = occupied.iter().map(|&o| if o { 0.0 } else { cap_f }).collect();
-    let longest = cols.max(rows).max(layers);
-    let mut line = vec![0.0; longest];
-    let mut out = vec![0.0; longest];
-    let mut hull = vec![0usize; longest];
-    let mut bounds = vec![0.0; longest + 1];
-    // Along x.
-    for start in (0..field.len()).step_by(cols.max(1)) {
-        let seg = &mut field[start..start + cols];
-        squared_distance_1d(seg, &mut out[..cols], &mut hull, &mut bounds);
-        for (v, o) in seg.iter_mut().zip(&out[..cols]) {
-            *v = o.min(cap_f);
+    let plane = cols * rows;
+    let cap32 = u32::from(cap);
+    let mut planar = vec![0u16; plane * layers];
+    if plane == 0 || layers == 0 {
+        return (planar.clone(), planar);
+    }
+    // Column distances at or beyond `far` square to at least the cap.
+    let mut far = (f64::from(cap)).sqrt() as u32;
+    while far * far < cap32 {
+        far += 1;
+    }
+    let far = far as u16;
+    let mut hull = Hull::default();
+    let mut squares = vec![0u32; cols.max(layers * LAYER_BLOCK)];
+    for (occ, g) in occupied[..plane * layers].chunks_exact(plane).zip(planar.chunks_exact_mut(plane)) {
+        // Phase 1, down: distance to the nearest occupied cell above in the same column.
+        for (o, v) in occ[..cols].iter().zip(&mut g[..cols]) {
+            *v = if *o { 0 } else { far };
+        }
+        for r in 1..rows {
+            let (done, rest) = g.split_at_mut(r * cols);
+            let above = &done[(r - 1) * cols..];
+            for ((o, v), &u) in occ[r * cols..(r + 1) * cols].iter().zip(&mut rest[..cols]).zip(above) {
+                *v = if *o { 0 } else { (u + 1).min(far) };
+            }
+        }
+        // Up: or below.
+        for r in (0..rows - 1).rev() {
+            let (head, below) = g.split_at_mut((r + 1) * cols);
+            for (v, &b) in head[r * cols..].iter_mut().zip(&below[..cols]) {
+                *v = (*v).min(b + 1);
+            }
+        }
+        // Phase 2: per row, the envelope of the squared column distances.
+        for row in g.chunks_exact_mut(cols) {
+            for (s, &d) in squares.iter_mut().zip(row.iter()) {
+                *s = (u32::from(d) * u32::from(d)).min(cap32);
+            }
+            envelope(&squares[..cols], cap32, row, &mut hull);
         }
     }
-    // Along y, then z: gather the strided line, transform, scatter back.
-    let mut pass = |field: &mut [f64], stride: usize, len: usize, starts: &mut dyn Iterator<Item = usize>| {
-        for start in starts {
-            for (i, l) in line[..len].iter_mut().enumerate() {
-                *l = field[start + i * stride];
-            }
-            squared_distance_1d(&line[..len], &mut out[..len], &mut hull, &mut bounds);
-            for (i, o) in out[..len].iter().enumerate() {
-                field[start + i * stride] = o.min(cap_f);
+    if layers == 1 {
+        return (planar.clone(), planar);
+    }
+    // Layer pass: blocks of neighbouring cells, gathered across all layers.
+    let mut full = vec![0u16; plane * layers];
+    let mut block_out = vec![0u16; layers * LAYER_BLOCK];
+    for base in (0..plane).step_by(LAYER_BLOCK) {
+        let width = LAYER_BLOCK.min(plane - base);
+        for z in 0..layers {
+            let src = &planar[z * plane + base..z * plane + base + width];
+            for (j, &v) in src.iter().enumerate() {
+                squares[j * layers + z] = u32::from(v);
             }
         }
-    };
-    pass(&mut field, cols, rows, &mut (0..layers).flat_map(|z| (0..cols).map(move |c| z * rows * cols + c)));
-    let planar: Vec<u16> = field.iter().map(|v| v.round() as u16).collect();
-    pass(&mut field, rows * cols, layers, &mut (0..rows * cols));
-    (field.into_iter().map(|v| v.round() as u16).collect(), planar)
+        for j in 0..width {
+            let span = j * layers..(j + 1) * layers;
+            envelope(&squares[span.clone()], cap32, &mut block_out[span], &mut hull);
+        }
+        for z in 0..layers {
+            let dst = &mut full[z * plane + base..z * plane + base + width];
+            for (j, v) in dst.iter_mut().enumerate() {
+                *v = block_out[j * layers + z];
+            }
+        }
+    }
+    (full, planar)
 }
 
 #[cfg(test)]
@@ -100,6 +183,98 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    // The Felzenszwalb-Huttenlocher implementation this module used before (f64 envelopes,
+    // strided gathers), kept here only as a second implementation to compare against.
+    /// One-dimensional squared-distance transform of a sampled function: `out[q] = min_p f[p] +
+    /// (q - p)^2`. `hull` and `bounds` are scratch buffers of at least `f.len()` and `f.len() + 1`.
+    fn squared_distance_1d(f: &[f64], out: &mut [f64], hull: &mut [usize], bounds: &mut [f64]) {
+        let n = f.len();
+        if n == 0 {
+            return;
+        }
+        let mut k = 0usize;
+        hull[0] = 0;
+        bounds[0] = f64::NEG_INFINITY;
+        bounds[1] = f64::INFINITY;
+        for q in 1..n {
+            let fq = f[q] + (q * q) as f64;
+            let mut s;
+            loop {
+                let p = hull[k];
+                s = (fq - (f[p] + (p * p) as f64)) / (2.0 * (q - p) as f64);
+                // bounds[0] is -inf, so this stops at k == 0 at the latest.
+                if s <= bounds[k] {
+                    k -= 1;
+                } else {
+                    break;
+                }
+            }
+            k += 1;
+            hull[k] = q;
+            bounds[k] = s;
+            bounds[k + 1] = f64::INFINITY;
+        }
+        k = 0;
+        for (q, o) in out.iter_mut().enumerate().take(n) {
+            while bounds[k + 1] < q as f64 {
+                k += 1;
+            }
+            let p = hull[k];
+            let d = q as f64 - p as f64;
+            *o = d * d + f[p];
+        }
+    }
+
+    /// Squared Euclidean distance (voxels^2) from every voxel to the nearest occupied one, capped
+    /// at `cap`. `occupied` is indexed `(layer * rows + row) * cols + col`.
+    /// Both the 3D squared distances and, per layer, the squared horizontal distance to the
+    /// nearest occupied voxel of the same layer (the transform before its vertical pass), capped.
+    fn old_squared_distances(
+        occupied: &[bool],
+        cols: usize,
+        rows: usize,
+        layers: usize,
+        cap: u16,
+    ) -> (Vec<u16>, Vec<u16>) {
+        let cap_f = f64::from(cap);
+        let mut field: Vec<f64> = occupied.iter().map(|&o| if o { 0.0 } else { cap_f }).collect();
+        let longest = cols.max(rows).max(layers);
+        let mut line = vec![0.0; longest];
+        let mut out = vec![0.0; longest];
+        let mut hull = vec![0usize; longest];
+        let mut bounds = vec![0.0; longest + 1];
+        // Along x.
+        for start in (0..field.len()).step_by(cols.max(1)) {
+            let seg = &mut field[start..start + cols];
+            squared_distance_1d(seg, &mut out[..cols], &mut hull, &mut bounds);
+            for (v, o) in seg.iter_mut().zip(&out[..cols]) {
+                *v = o.min(cap_f);
+            }
+        }
+        // Along y, then z: gather the strided line, transform, scatter back.
+        let mut pass =
+            |field: &mut [f64], stride: usize, len: usize, starts: &mut dyn Iterator<Item = usize>| {
+                for start in starts {
+                    for (i, l) in line[..len].iter_mut().enumerate() {
+                        *l = field[start + i * stride];
+                    }
+                    squared_distance_1d(&line[..len], &mut out[..len], &mut hull, &mut bounds);
+                    for (i, o) in out[..len].iter().enumerate() {
+                        field[start + i * stride] = o.min(cap_f);
+                    }
+                }
+            };
+        pass(
+            &mut field,
+            cols,
+            rows,
+            &mut (0..layers).flat_map(|z| (0..cols).map(move |c| z * rows * cols + c)),
+        );
+        let planar: Vec<u16> = field.iter().map(|v| v.round() as u16).collect();
+        pass(&mut field, rows * cols, layers, &mut (0..rows * cols));
+        (field.into_iter().map(|v| v.round() as u16).collect(), planar)
+    }
 
     #[test]
     fn matches_brute_force_on_random_grids() {
@@ -141,6 +316,28 @@ mod tests {
                         assert_eq!(u32::from(planar[(z * rows + r) * cols + c]), best_planar);
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn matches_previous_implementation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(43);
+        let mut shapes = vec![(0, 5, 2), (5, 0, 2), (4, 4, 0), (1, 1, 1), (1, 30, 3), (30, 1, 3), (1, 1, 40)];
+        for _ in 0..60 {
+            shapes.push((rng.random_range(1..40), rng.random_range(1..40), rng.random_range(1..8)));
+        }
+        for (case, &(cols, rows, layers)) in shapes.iter().enumerate() {
+            let density = match case % 5 {
+                0 => 0.0,
+                1 => 1.0,
+                _ => rng.random_range(0.001..0.2),
+            };
+            let occupied: Vec<bool> = (0..cols * rows * layers).map(|_| rng.random_bool(density)).collect();
+            for cap in [0u16, 1, 2, 5, 40, 300, u16::MAX - 1, u16::MAX] {
+                let new = squared_distances(&occupied, cols, rows, layers, cap);
+                let old = old_squared_distances(&occupied, cols, rows, layers, cap);
+                assert_eq!(new, old, "case {case} ({cols}x{rows}x{layers}, density {density:.3}) cap {cap}");
             }
         }
     }
