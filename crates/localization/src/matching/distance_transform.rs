@@ -25,79 +25,67 @@
 /// Cells per block of the layer pass: each layer is read and written in runs of this many.
 const LAYER_BLOCK: usize = 256;
 
-/// Reusable buffers for [`envelope`]: the hull's apexes and the left ends of their intervals.
-#[derive(Default)]
-struct Hull {
-    /// Position of each parabola on the hull.
-    at: Vec<usize>,
-    /// Its apex value.
-    apex: Vec<i64>,
-    /// Left end of its interval as a fraction `num / den` (`den > 0`).
-    num: Vec<i64>,
+/// One parabola of a lower envelope.
+#[derive(Clone, Copy, Default)]
+struct Piece {
+    /// Position of its apex.
+    at: i64,
+    /// Its apex value plus `at^2` (so that intersections need no squares).
+    lifted: i64,
+    /// Left end of its interval on the envelope, the fraction `num / den` (`den > 0`).
+    num: i64,
     /// Denominator of `num`.
-    den: Vec<i64>,
+    den: i64,
 }
 
 /// One-dimensional lower envelope: `out[x] = min(cap, min_i f[i] + (x - i)^2)`, skipping
-/// parabolas whose apex `f[i]` is at or above `cap`.
-fn envelope(f: &[u32], cap: u32, out: &mut [u16], hull: &mut Hull) {
-    let n = f.len();
-    for v in [&mut hull.apex, &mut hull.num, &mut hull.den] {
-        v.resize(n, 0);
-    }
-    hull.at.resize(n, 0);
-    let (at, apex, num, den) = (&mut hull.at[..], &mut hull.apex[..], &mut hull.num[..], &mut hull.den[..]);
-    // `top` is the hull's length.
-    let mut top = 0usize;
+/// parabolas whose apex `f[i]` is at or above `cap`. `hull` is a reusable buffer.
+fn envelope(f: &[u32], cap: u32, out: &mut [u16], hull: &mut Vec<Piece>) {
+    hull.clear();
     for (q, &fq) in f.iter().enumerate() {
         if fq >= cap {
             continue;
         }
-        let a = i64::from(fq) + (q * q) as i64;
-        loop {
-            if top == 0 {
-                at[0] = q;
-                apex[0] = a;
-                top = 1;
+        let q = q as i64;
+        let lifted = i64::from(fq) + q * q;
+        let mut piece = Piece { at: q, lifted, num: 0, den: 1 };
+        while let Some(last) = hull.last() {
+            // Intersection with the last parabola: (lifted - last.lifted) / (2 (q - last.at)).
+            piece.num = lifted - last.lifted;
+            piece.den = 2 * (q - last.at);
+            // At or before the left end of its interval, the last parabola is hidden.
+            if hull.len() > 1 && piece.num * last.den <= last.num * piece.den {
+                hull.pop();
+            } else {
                 break;
             }
-            let k = top - 1;
-            // Intersection with the hull's last parabola: s = (a - apex[k]) / (2 (q - at[k])).
-            let (sn, sd) = (a - apex[k], 2 * (q - at[k]) as i64);
-            // Its interval starts at num[k] / den[k]; s at or before that hides it.
-            if k > 0 && sn * den[k] <= num[k] * sd {
-                top -= 1;
-                continue;
-            }
-            at[top] = q;
-            apex[top] = a;
-            num[top] = sn;
-            den[top] = sd;
-            top += 1;
-            break;
         }
+        hull.push(piece);
     }
-    if top == 0 {
+    let Some(first) = hull.first() else {
         out.fill(cap as u16);
         return;
-    }
-    let mut k = 0usize;
+    };
+    let mut current = *first;
+    let mut next = hull[1..].iter();
+    let mut upcoming = next.next();
+    let cap = i64::from(cap);
     for (x, o) in out.iter_mut().enumerate() {
-        let xi = x as i64;
-        while k + 1 < top && num[k + 1] < xi * den[k + 1] {
-            k += 1;
+        let x = x as i64;
+        while let Some(p) = upcoming.filter(|p| p.num < x * p.den) {
+            current = *p;
+            upcoming = next.next();
         }
-        let p = at[k];
-        let d = xi - p as i64;
-        let v = d * d + apex[k] - (p * p) as i64;
-        *o = v.min(i64::from(cap)) as u16;
+        let v = current.lifted + x * (x - 2 * current.at);
+        *o = v.min(cap) as u16;
     }
 }
 
 /// Squared Euclidean distance (voxels^2) from every voxel to the nearest occupied one, capped
 /// at `cap`. `occupied` is indexed `(layer * rows + row) * cols + col`.
 pub fn squared_distance_3d(occupied: &[bool], cols: usize, rows: usize, layers: usize, cap: u16) -> Vec<u16> {
-    squared_distances(occupied, cols, rows, layers, cap).0
+    let planar = planar_distances(occupied, cols, rows, layers, cap);
+    if layers <= 1 { planar } else { layer_pass(&planar, cols * rows, layers, cap) }
 }
 
 /// Both the 3D squared distances and, per layer, the squared horizontal distance to the
@@ -109,20 +97,27 @@ pub fn squared_distances(
     layers: usize,
     cap: u16,
 ) -> (Vec<u16>, Vec<u16>) {
+    let planar = planar_distances(occupied, cols, rows, layers, cap);
+    let full = if layers <= 1 { planar.clone() } else { layer_pass(&planar, cols * rows, layers, cap) };
+    (full, planar)
+}
+
+/// Per layer, capped squared distances to the nearest occupied cell of the same layer.
+fn planar_distances(occupied: &[bool], cols: usize, rows: usize, layers: usize, cap: u16) -> Vec<u16> {
     let plane = cols * rows;
     let cap32 = u32::from(cap);
     let mut planar = vec![0u16; plane * layers];
-    if plane == 0 || layers == 0 {
-        return (planar.clone(), planar);
+    if plane == 0 {
+        return planar;
     }
     // Column distances at or beyond `far` square to at least the cap.
-    let mut far = (f64::from(cap)).sqrt() as u32;
+    let mut far = f64::from(cap).sqrt() as u32;
     while far * far < cap32 {
         far += 1;
     }
     let far = far as u16;
-    let mut hull = Hull::default();
-    let mut squares = vec![0u32; cols.max(layers * LAYER_BLOCK)];
+    let mut hull = Vec::with_capacity(cols);
+    let mut squares = vec![0u32; cols];
     for (occ, g) in occupied[..plane * layers].chunks_exact(plane).zip(planar.chunks_exact_mut(plane)) {
         // Phase 1, down: distance to the nearest occupied cell above in the same column.
         for (o, v) in occ[..cols].iter().zip(&mut g[..cols]) {
@@ -147,26 +142,30 @@ pub fn squared_distances(
             for (s, &d) in squares.iter_mut().zip(row.iter()) {
                 *s = (u32::from(d) * u32::from(d)).min(cap32);
             }
-            envelope(&squares[..cols], cap32, row, &mut hull);
+            envelope(&squares, cap32, row, &mut hull);
         }
     }
-    if layers == 1 {
-        return (planar.clone(), planar);
-    }
-    // Layer pass: blocks of neighbouring cells, gathered across all layers.
+    planar
+}
+
+/// The envelope along the layers of `planar` (`layers` planes of `plane` cells), in blocks of
+/// neighbouring cells gathered across all layers.
+fn layer_pass(planar: &[u16], plane: usize, layers: usize, cap: u16) -> Vec<u16> {
+    let cap32 = u32::from(cap);
     let mut full = vec![0u16; plane * layers];
+    let mut hull = Vec::with_capacity(layers);
+    let mut block_in = vec![0u32; layers * LAYER_BLOCK];
     let mut block_out = vec![0u16; layers * LAYER_BLOCK];
     for base in (0..plane).step_by(LAYER_BLOCK) {
         let width = LAYER_BLOCK.min(plane - base);
         for z in 0..layers {
             let src = &planar[z * plane + base..z * plane + base + width];
             for (j, &v) in src.iter().enumerate() {
-                squares[j * layers + z] = u32::from(v);
+                block_in[j * layers + z] = u32::from(v);
             }
         }
-        for j in 0..width {
-            let span = j * layers..(j + 1) * layers;
-            envelope(&squares[span.clone()], cap32, &mut block_out[span], &mut hull);
+        for (f, out) in block_in.chunks_exact(layers).zip(block_out.chunks_exact_mut(layers)).take(width) {
+            envelope(f, cap32, out, &mut hull);
         }
         for z in 0..layers {
             let dst = &mut full[z * plane + base..z * plane + base + width];
@@ -175,7 +174,7 @@ pub fn squared_distances(
             }
         }
     }
-    (full, planar)
+    full
 }
 
 #[cfg(test)]
