@@ -183,98 +183,6 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    // The Felzenszwalb-Huttenlocher implementation this module used before (f64 envelopes,
-    // strided gathers), kept here only as a second implementation to compare against.
-    /// One-dimensional squared-distance transform of a sampled function: `out[q] = min_p f[p] +
-    /// (q - p)^2`. `hull` and `bounds` are scratch buffers of at least `f.len()` and `f.len() + 1`.
-    fn squared_distance_1d(f: &[f64], out: &mut [f64], hull: &mut [usize], bounds: &mut [f64]) {
-        let n = f.len();
-        if n == 0 {
-            return;
-        }
-        let mut k = 0usize;
-        hull[0] = 0;
-        bounds[0] = f64::NEG_INFINITY;
-        bounds[1] = f64::INFINITY;
-        for q in 1..n {
-            let fq = f[q] + (q * q) as f64;
-            let mut s;
-            loop {
-                let p = hull[k];
-                s = (fq - (f[p] + (p * p) as f64)) / (2.0 * (q - p) as f64);
-                // bounds[0] is -inf, so this stops at k == 0 at the latest.
-                if s <= bounds[k] {
-                    k -= 1;
-                } else {
-                    break;
-                }
-            }
-            k += 1;
-            hull[k] = q;
-            bounds[k] = s;
-            bounds[k + 1] = f64::INFINITY;
-        }
-        k = 0;
-        for (q, o) in out.iter_mut().enumerate().take(n) {
-            while bounds[k + 1] < q as f64 {
-                k += 1;
-            }
-            let p = hull[k];
-            let d = q as f64 - p as f64;
-            *o = d * d + f[p];
-        }
-    }
-
-    /// Squared Euclidean distance (voxels^2) from every voxel to the nearest occupied one, capped
-    /// at `cap`. `occupied` is indexed `(layer * rows + row) * cols + col`.
-    /// Both the 3D squared distances and, per layer, the squared horizontal distance to the
-    /// nearest occupied voxel of the same layer (the transform before its vertical pass), capped.
-    fn old_squared_distances(
-        occupied: &[bool],
-        cols: usize,
-        rows: usize,
-        layers: usize,
-        cap: u16,
-    ) -> (Vec<u16>, Vec<u16>) {
-        let cap_f = f64::from(cap);
-        let mut field: Vec<f64> = occupied.iter().map(|&o| if o { 0.0 } else { cap_f }).collect();
-        let longest = cols.max(rows).max(layers);
-        let mut line = vec![0.0; longest];
-        let mut out = vec![0.0; longest];
-        let mut hull = vec![0usize; longest];
-        let mut bounds = vec![0.0; longest + 1];
-        // Along x.
-        for start in (0..field.len()).step_by(cols.max(1)) {
-            let seg = &mut field[start..start + cols];
-            squared_distance_1d(seg, &mut out[..cols], &mut hull, &mut bounds);
-            for (v, o) in seg.iter_mut().zip(&out[..cols]) {
-                *v = o.min(cap_f);
-            }
-        }
-        // Along y, then z: gather the strided line, transform, scatter back.
-        let mut pass =
-            |field: &mut [f64], stride: usize, len: usize, starts: &mut dyn Iterator<Item = usize>| {
-                for start in starts {
-                    for (i, l) in line[..len].iter_mut().enumerate() {
-                        *l = field[start + i * stride];
-                    }
-                    squared_distance_1d(&line[..len], &mut out[..len], &mut hull, &mut bounds);
-                    for (i, o) in out[..len].iter().enumerate() {
-                        field[start + i * stride] = o.min(cap_f);
-                    }
-                }
-            };
-        pass(
-            &mut field,
-            cols,
-            rows,
-            &mut (0..layers).flat_map(|z| (0..cols).map(move |c| z * rows * cols + c)),
-        );
-        let planar: Vec<u16> = field.iter().map(|v| v.round() as u16).collect();
-        pass(&mut field, rows * cols, layers, &mut (0..rows * cols));
-        (field.into_iter().map(|v| v.round() as u16).collect(), planar)
-    }
-
     #[test]
     fn matches_brute_force_on_random_grids() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -319,12 +227,31 @@ mod tests {
         }
     }
 
+    /// Brute force over every occupied voxel, uncapped: (3D, planar) squared distances, or
+    /// `u32::MAX` where nothing is occupied.
+    fn brute(occupied: &[bool], cols: usize, rows: usize) -> (Vec<u32>, Vec<u32>) {
+        let index = |i: usize| (i % cols, (i / cols) % rows, i / (cols * rows));
+        let sites: Vec<_> = (0..occupied.len()).filter(|&i| occupied[i]).map(index).collect();
+        let (mut full, mut planar) = (vec![u32::MAX; occupied.len()], vec![u32::MAX; occupied.len()]);
+        for i in 0..occupied.len() {
+            let (c, r, z) = index(i);
+            for &(c2, r2, z2) in &sites {
+                let flat = (c.abs_diff(c2).pow(2) + r.abs_diff(r2).pow(2)) as u32;
+                full[i] = full[i].min(flat + z.abs_diff(z2).pow(2) as u32);
+                if z == z2 {
+                    planar[i] = planar[i].min(flat);
+                }
+            }
+        }
+        (full, planar)
+    }
+
     #[test]
-    fn matches_previous_implementation() {
+    fn matches_brute_force_on_edge_grids_and_caps() {
         let mut rng = ChaCha8Rng::seed_from_u64(43);
         let mut shapes = vec![(0, 5, 2), (5, 0, 2), (4, 4, 0), (1, 1, 1), (1, 30, 3), (30, 1, 3), (1, 1, 40)];
-        for _ in 0..60 {
-            shapes.push((rng.random_range(1..40), rng.random_range(1..40), rng.random_range(1..8)));
+        for _ in 0..40 {
+            shapes.push((rng.random_range(1..24), rng.random_range(1..24), rng.random_range(1..6)));
         }
         for (case, &(cols, rows, layers)) in shapes.iter().enumerate() {
             let density = match case % 5 {
@@ -333,10 +260,14 @@ mod tests {
                 _ => rng.random_range(0.001..0.2),
             };
             let occupied: Vec<bool> = (0..cols * rows * layers).map(|_| rng.random_bool(density)).collect();
+            let (full, planar) = brute(&occupied, cols, rows);
             for cap in [0u16, 1, 2, 5, 40, 300, u16::MAX - 1, u16::MAX] {
-                let new = squared_distances(&occupied, cols, rows, layers, cap);
-                let old = old_squared_distances(&occupied, cols, rows, layers, cap);
-                assert_eq!(new, old, "case {case} ({cols}x{rows}x{layers}, density {density:.3}) cap {cap}");
+                let capped = |v: &[u32]| v.iter().map(|&d| d.min(u32::from(cap)) as u16).collect::<Vec<_>>();
+                let what = format!("case {case} ({cols}x{rows}x{layers}, density {density:.3}) cap {cap}");
+                let (new_full, new_planar) = squared_distances(&occupied, cols, rows, layers, cap);
+                assert_eq!(new_full, capped(&full), "{what}");
+                assert_eq!(new_planar, capped(&planar), "{what}");
+                assert_eq!(squared_distance_3d(&occupied, cols, rows, layers, cap), new_full, "{what}");
             }
         }
     }
