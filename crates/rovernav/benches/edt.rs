@@ -1,8 +1,7 @@
 //! Distance transforms in ns per cell at 1024x1024 and 4096x4096 (throughput = cells): rovernav's
 //! exact EDT (`rovernav_localization::matching::distance_transform`) against the straightforward
-//! Felzenszwalb-Huttenlocher transform, a two-pass 3-4 chamfer and a cache-friendly exact
-//! transform (Meijster et al.; the baselines of `rovernav bench report`, `src/bench/edt.rs`), on
-//! a 2 % occupied grid. The memory-bandwidth floor is
+//! Felzenszwalb-Huttenlocher transform and a two-pass 3-4 chamfer (the baselines of `rovernav
+//! bench report`, `src/bench/edt.rs`), on a 2 % occupied grid. The memory-bandwidth floor is
 //! about 1.4 ns per cell here. Run: `cargo bench -p rovernav --bench edt`.
 
 #[allow(dead_code)] // the bench uses the baselines, not every helper
@@ -26,13 +25,11 @@ fn transforms(c: &mut Criterion) {
         let ours = ns(&|| drop(black_box(squared_distance_3d(&occ, side, side, 1, u16::MAX))));
         let fh = ns(&|| drop(black_box(edt::felzenszwalb_huttenlocher(&occ, side, side))));
         let chamfer = ns(&|| drop(black_box(edt::chamfer_3_4(&occ, side, side))));
-        let fast = ns(&|| drop(black_box(edt::meijster(&occ, side, side))));
         eprintln!(
             "EDT {side}x{side}: rovernav exact {ours:.1} ns/cell, Felzenszwalb-Huttenlocher {fh:.1} ({:.2}x), \
-             3-4 chamfer {chamfer:.1} ({:.2}x), cache-friendly exact (Meijster) {fast:.1} ({:.2}x)",
+             3-4 chamfer {chamfer:.1} ({:.2}x)",
             fh / ours,
             chamfer / ours,
-            fast / ours
         );
         let mut group = c.benchmark_group(format!("edt {side}x{side}"));
         group.sample_size(10).throughput(Throughput::Elements(side as u64 * side as u64));
@@ -43,9 +40,6 @@ fn transforms(c: &mut Criterion) {
             b.iter(|| edt::felzenszwalb_huttenlocher(&occ, side, side))
         });
         group.bench_function("chamfer 3-4", |b| b.iter(|| edt::chamfer_3_4(&occ, side, side)));
-        group.bench_function("meijster (cache-friendly exact)", |b| {
-            b.iter(|| edt::meijster(&occ, side, side))
-        });
         group.finish();
     }
 }

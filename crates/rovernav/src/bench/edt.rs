@@ -9,15 +9,9 @@
 //!   section 2.1), straightforwardly: one 1D lower envelope of parabolas per column, then per row,
 //!   on `f64` values with a fresh envelope buffer per line.
 //!
-//! And what an exact transform costs when written for the cache, as a reference for
-//! rovernav's own: [`meijster`], Meijster, Roerdink and Hesselink's separable exact EDT ("A
-//! general algorithm for computing distance transforms in linear time", Mathematical
-//! Morphology and its Applications to Image and Signal Processing, 2000), with its first
-//! phase (distance along columns) swept row by row over all columns at once, so that both
-//! phases read memory contiguously, and integer arithmetic throughout.
-//!
-//! rovernav's exact transform is `rovernav_localization::matching::distance_transform`; the
-//! report asserts it, [`felzenszwalb_huttenlocher`] and [`meijster`] agree on every cell.
+//! rovernav's exact transform is `rovernav_localization::matching::distance_transform`
+//! (Meijster, Roerdink and Hesselink's algorithm, written for the cache); the report asserts it
+//! and [`felzenszwalb_huttenlocher`] agree on every cell.
 
 /// Two-pass 3-4 chamfer distances (1/3 cell units) of a `cols` x `rows` occupancy grid
 /// (row-major); cells farther than any occupied one get `u32::MAX / 2`.
@@ -126,78 +120,6 @@ pub fn felzenszwalb_huttenlocher(occupied: &[bool], cols: usize, rows: usize) ->
     d
 }
 
-/// Exact squared Euclidean distances (cells^2) of a `cols` x `rows` occupancy grid (row-major)
-/// by Meijster et al.'s algorithm (see the module doc); `u32::MAX` everywhere when nothing is
-/// occupied.
-pub fn meijster(occupied: &[bool], cols: usize, rows: usize) -> Vec<u32> {
-    if !occupied.iter().any(|&o| o) {
-        return vec![u32::MAX; cols * rows];
-    }
-    // Phase 1: distance to the nearest occupied cell in the same column, as rows sweep down
-    // then up (all columns at once: contiguous rows). `far` exceeds any real distance.
-    let far = (rows + cols) as u32;
-    let mut g = vec![far; cols * rows];
-    for (r, row) in occupied.chunks_exact(cols).enumerate() {
-        for c in 0..cols {
-            g[r * cols + c] = if row[c] {
-                0
-            } else if r > 0 {
-                (g[(r - 1) * cols + c] + 1).min(far)
-            } else {
-                far
-            };
-        }
-    }
-    for r in (0..rows.saturating_sub(1)).rev() {
-        let (upper, lower) = g.split_at_mut((r + 1) * cols);
-        for (a, &b) in upper[r * cols..].iter_mut().zip(&lower[..cols]) {
-            *a = (*a).min(b + 1);
-        }
-    }
-    // Phase 2: per row, the lower envelope of (x - i)^2 + g(i)^2 with integer separators.
-    let mut out = vec![0u32; cols * rows];
-    let (mut s, mut t) = (vec![0usize; cols], vec![0i64; cols]);
-    let mut g2 = vec![0i64; cols];
-    for r in 0..rows {
-        for (v, &d) in g2.iter_mut().zip(&g[r * cols..(r + 1) * cols]) {
-            *v = i64::from(d) * i64::from(d);
-        }
-        let g2 = &g2;
-        let f = |x: i64, i: usize| (x - i as i64) * (x - i as i64) + g2[i];
-        let sep = |i: usize, u: usize| {
-            let (i64_i, u2) = (i as i64, u as i64);
-            (u2 * u2 - i64_i * i64_i + g2[u] - g2[i]).div_euclid(2 * (u2 - i64_i))
-        };
-        let mut q: isize = 0;
-        s[0] = 0;
-        t[0] = 0;
-        for u in 1..cols {
-            while q >= 0 && f(t[q as usize], s[q as usize]) > f(t[q as usize], u) {
-                q -= 1;
-            }
-            if q < 0 {
-                q = 0;
-                s[0] = u;
-            } else {
-                let w = 1 + sep(s[q as usize], u);
-                if w < cols as i64 {
-                    q += 1;
-                    s[q as usize] = u;
-                    t[q as usize] = w;
-                }
-            }
-        }
-        let row = &mut out[r * cols..(r + 1) * cols];
-        for u in (0..cols).rev() {
-            row[u] = f(u as i64, s[q as usize]) as u32;
-            if u as i64 == t[q as usize] {
-                q -= 1;
-            }
-        }
-    }
-    out
-}
-
 /// A reproducible occupancy grid: each cell occupied with probability `density` (xorshift from
 /// `seed`).
 pub fn random_occupancy(cols: usize, rows: usize, density: f64, seed: u64) -> Vec<bool> {
@@ -239,11 +161,6 @@ mod tests {
             let occ = super::random_occupancy(cols, rows, density, seed);
             let truth = brute(&occ, cols, rows);
             assert_eq!(super::felzenszwalb_huttenlocher(&occ, cols, rows), truth, "seed {seed}");
-            let fast: Vec<f64> = super::meijster(&occ, cols, rows)
-                .iter()
-                .map(|&d| if d == u32::MAX { f64::INFINITY } else { d as f64 })
-                .collect();
-            assert_eq!(fast, truth, "seed {seed}");
             let chamfer = super::chamfer_3_4(&occ, cols, rows);
             for (i, (&ch, &t)) in chamfer.iter().zip(&truth).enumerate() {
                 if t.is_finite() {

@@ -2,7 +2,7 @@
 //! rovernav's implementation and its baseline on the same input in this process and checks
 //! that they agree (path costs, optima, distances) before reporting times.
 
-use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, meijster, random_occupancy};
+use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, random_occupancy};
 use super::report::{Row, alternate};
 use anyhow::{Context, anyhow, ensure};
 use rovernav_executive::{Mission, Run};
@@ -241,7 +241,7 @@ pub fn matcher_scan_window(quick: bool) -> anyhow::Result<Row> {
     Ok(row)
 }
 
-/// `edt-4096`: rovernav's exact EDT (localization's separable lower envelope) against the
+/// `edt-4096`: rovernav's exact EDT (localization's Meijster-Roerdink-Hesselink transform) against the
 /// straightforward Felzenszwalb-Huttenlocher transform and a 3-4 chamfer, on a 2 % occupied grid.
 pub fn edt(quick: bool) -> anyhow::Result<Row> {
     let reps = if quick { 1 } else { 3 };
@@ -260,18 +260,13 @@ pub fn edt(quick: bool) -> anyhow::Result<Row> {
         {
             return Err(anyhow!("edt {side}: cell {i}: rovernav {} vs exact baseline {}", ours[i], exact[i]));
         }
-        let ((t_chamfer, t_meijster), _, fast) =
-            alternate(reps, || chamfer_3_4(&occ, side, side), || meijster(&occ, side, side));
-        if let Some(i) = fast.iter().zip(&exact).position(|(&a, &b)| f64::from(a) != b) {
-            return Err(anyhow!("edt {side}: cell {i}: Meijster {} vs exact baseline {}", fast[i], exact[i]));
-        }
+        let ((t_chamfer, _), _, ()) = alternate(reps, || chamfer_3_4(&occ, side, side), || ());
         details.insert(
             format!("ns_per_cell_{side}"),
             json!({
                 "rovernav_exact": t_ours * 1e9 / cells,
                 "felzenszwalb_huttenlocher": t_base * 1e9 / cells,
                 "chamfer_3_4": t_chamfer * 1e9 / cells,
-                "meijster_cache_friendly": t_meijster * 1e9 / cells,
             }),
         );
         main = Some((t_ours, t_base));
@@ -283,7 +278,7 @@ pub fn edt(quick: bool) -> anyhow::Result<Row> {
         "exact EDT (localization distance_transform, 4096x4096)",
         "straightforward Felzenszwalb-Huttenlocher (f64, per-line buffers)",
         main.expect("ran"),
-        "f64 envelopes and the strided column pass (one cache miss per cell); 2 full f64 copies of the grid",
+        "the row envelopes' data-dependent branches (hull pops), about 90 % of the time; memory passes are contiguous",
     )
     .details(details.into()))
 }
