@@ -118,27 +118,29 @@ fn planar_distances(occupied: &[bool], cols: usize, rows: usize, layers: usize, 
     let far = far as u16;
     let mut hull = Vec::with_capacity(cols);
     let mut squares = vec![0u32; cols];
+    let mut below = vec![0u16; cols];
     for (occ, g) in occupied[..plane * layers].chunks_exact(plane).zip(planar.chunks_exact_mut(plane)) {
         // Phase 1, down: distance to the nearest occupied cell above in the same column.
         for (o, v) in occ[..cols].iter().zip(&mut g[..cols]) {
-            *v = if *o { 0 } else { far };
+            *v = far * u16::from(!*o);
         }
         for r in 1..rows {
             let (done, rest) = g.split_at_mut(r * cols);
             let above = &done[(r - 1) * cols..];
             for ((o, v), &u) in occ[r * cols..(r + 1) * cols].iter().zip(&mut rest[..cols]).zip(above) {
-                *v = if *o { 0 } else { (u + 1).min(far) };
+                *v = (u + 1).min(far) * u16::from(!*o);
             }
         }
-        // Up: or below.
-        for r in (0..rows - 1).rev() {
-            let (head, below) = g.split_at_mut((r + 1) * cols);
-            for (v, &b) in head[r * cols..].iter_mut().zip(&below[..cols]) {
-                *v = (*v).min(b + 1);
+        // Up (or below), fused with phase 2 while the row is in cache: per row, the envelope
+        // of the squared column distances. `below` keeps the row under it before its envelope
+        // overwrites it.
+        for (r, row) in g.chunks_exact_mut(cols).enumerate().rev() {
+            if r + 1 < rows {
+                for (v, &b) in row.iter_mut().zip(&below) {
+                    *v = (*v).min(b + 1);
+                }
             }
-        }
-        // Phase 2: per row, the envelope of the squared column distances.
-        for row in g.chunks_exact_mut(cols) {
+            below.copy_from_slice(row);
             for (s, &d) in squares.iter_mut().zip(row.iter()) {
                 *s = (u32::from(d) * u32::from(d)).min(cap32);
             }
