@@ -12,7 +12,8 @@
 //! row the lower envelope of the parabolas `(x - i)^2 + g(i)^2` (their second phase), then the
 //! same envelope along the layers. Departures, each for speed with identical outputs:
 //! - the first phase sweeps row by row over all columns at once, so it reads and writes memory
-//!   contiguously (the paper scans each column top to bottom);
+//!   contiguously (the paper scans each column top to bottom), and its upward sweep is fused
+//!   with the row envelopes so that each row is transformed while still in cache;
 //! - the envelopes compare intersection points as exact integer fractions (cross-multiplied,
 //!   as in Felzenszwalb and Huttenlocher's formulation, Theory of Computing 8, 2012, section
 //!   2.1) instead of the paper's integer division `Sep`, so no cell pays for a division;
