@@ -26,6 +26,7 @@
 #[path = "eval_descent_fix.rs"]
 mod fix;
 
+use crate::output::median;
 use anyhow::Context;
 use rovernav_core::{Grid2, GridGeometry};
 use rovernav_sim::scenes::descent::{
@@ -230,8 +231,8 @@ pub fn evaluate(
             GridGeometry { cols, rows: cols, resolution: cell, origin_x: cx - half, origin_y: cy - half };
         let cloud: Vec<[f64; 4]> =
             matches.iter().map(|m| [m.point[0], m.point[1], m.point[2], 1.0]).collect();
-        let mut zs: Vec<f64> = matches.iter().map(|m| m.point[2]).collect();
-        let level = median(&mut zs);
+        let zs: Vec<f64> = matches.iter().map(|m| m.point[2]).collect();
+        let level = median(&zs);
         prior = level.is_finite().then(|| (elevation_grid(&cloud, geometry), level));
         dem_points.extend(matches.iter().map(|m| {
             let [x, y, z] = m.point;
@@ -240,8 +241,8 @@ pub fn evaluate(
         pairs.push(figures);
         scored.extend(points);
     }
-    let mut ratios: Vec<f64> = pairs.iter().map(|p| p.ratio).filter(|r| r.is_finite()).collect();
-    let mut at_matching: Vec<f64> = pairs
+    let ratios: Vec<f64> = pairs.iter().map(|p| p.ratio).filter(|r| r.is_finite()).collect();
+    let at_matching: Vec<f64> = pairs
         .iter()
         .map(|p| p.measured_sigma_m / p.predicted_at_matching_sigma_m)
         .filter(|r| r.is_finite())
@@ -261,8 +262,8 @@ pub fn evaluate(
         matching_precision_px: precision_px,
         profile: profile(&images, &scored, f, precision_px, plan),
         pairs,
-        agreement_factor: median(&mut ratios),
-        agreement_at_matching_sigma: median(&mut at_matching),
+        agreement_factor: median(&ratios),
+        agreement_at_matching_sigma: median(&at_matching),
         localisation,
     }
 }
@@ -359,9 +360,9 @@ fn score_pair(
         })
         .collect();
     let mut normalised: Vec<f64> = rows.iter().map(|r| r[1] / r[2]).collect();
-    let centre = median(&mut normalised.clone());
-    let mut deviations: Vec<f64> = normalised.iter_mut().map(|v| (*v - centre).abs()).collect();
-    let scale = 1.4826 * median(&mut deviations);
+    let centre = median(&normalised);
+    let deviations: Vec<f64> = normalised.iter_mut().map(|v| (*v - centre).abs()).collect();
+    let scale = 1.4826 * median(&deviations);
     let used: Vec<&[f64; 4]> =
         rows.iter().filter(|r| (r[1] / r[2] - centre).abs() <= OUTLIER_SIGMAS * scale.max(1e-9)).collect();
     let rms = |k: usize| (used.iter().map(|r| r[k] * r[k]).sum::<f64>() / used.len().max(1) as f64).sqrt();
@@ -428,16 +429,6 @@ fn profile(
         lo = hi;
     }
     bins
-}
-
-/// Median (NaN when empty).
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 /// Prints the per-pair table and the profile.

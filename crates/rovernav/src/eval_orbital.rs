@@ -16,6 +16,7 @@
 //!   (the matcher's own warning); `unflagged_misses` counts the matches off by more than 0.5 m
 //!   that it did not flag.
 
+use crate::output::median;
 use anyhow::Context;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -157,9 +158,8 @@ pub fn evaluate(dem: &Dem, args: &EvalOrbitalArgs) -> anyhow::Result<OrbitalEval
     let seeds: Vec<u64> = (0..args.positions as u64).map(|k| args.first_seed.wrapping_add(k)).collect();
     let per_position: Vec<OrbitalPosition> =
         seeds.par_iter().map(|&seed| position(dem, &orbital, seed, args)).collect::<anyhow::Result<_>>()?;
-    let mut errors: Vec<f64> = per_position.iter().filter_map(|p| p.error_m).collect();
-    let mut headings: Vec<f64> =
-        per_position.iter().filter_map(|p| p.heading_error_deg.map(f64::abs)).collect();
+    let errors: Vec<f64> = per_position.iter().filter_map(|p| p.error_m).collect();
+    let headings: Vec<f64> = per_position.iter().filter_map(|p| p.heading_error_deg.map(f64::abs)).collect();
     let flagged = |p: &OrbitalPosition| p.failure_probability.is_none_or(|f| f > args.flag_probability);
     let within = |p: &OrbitalPosition| p.error_m.is_some_and(|e| e <= 0.5);
     let unflagged: Vec<&OrbitalPosition> = per_position.iter().filter(|p| !flagged(p)).collect();
@@ -168,12 +168,12 @@ pub fn evaluate(dem: &Dem, args: &EvalOrbitalArgs) -> anyhow::Result<OrbitalEval
         resolution_m: args.resolution,
         within_0_5m_fraction: per_position.iter().filter(|p| within(p)).count() as f64
             / args.positions as f64,
-        median_error_m: median(&mut errors),
+        median_error_m: median(&errors),
         flagged_failures: per_position.iter().filter(|p| flagged(p)).count(),
         unflagged_misses: unflagged.iter().filter(|p| !within(p)).count(),
         within_0_5m_unflagged_fraction: unflagged.iter().filter(|p| within(p)).count() as f64
             / unflagged.len().max(1) as f64,
-        median_heading_error_deg: median(&mut headings),
+        median_heading_error_deg: median(&headings),
         nees_mean_unflagged: {
             let n: Vec<f64> = unflagged.iter().filter_map(|p| p.nees).collect();
             n.iter().sum::<f64>() / n.len().max(1) as f64
@@ -181,16 +181,6 @@ pub fn evaluate(dem: &Dem, args: &EvalOrbitalArgs) -> anyhow::Result<OrbitalEval
         flag_probability: args.flag_probability,
         per_position,
     })
-}
-
-/// Median (NaN when empty).
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 /// One position: true terrain, panorama, local map, orbital reference, match.
@@ -291,13 +281,6 @@ fn print_table(e: &OrbitalEvaluation) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_of_odd_and_even() {
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
-        assert!(median(&mut []).is_nan());
-    }
 
     /// On the real Gale DEM at 1 m, a few positions: every match the matcher does not flag is
     /// within 0.5 m of the truth. Needs `gale/missionDEM.tif`: skipped without it, failed

@@ -412,8 +412,7 @@ fn approach(
                 &sim.truth(),
                 &model.stereo,
                 &model.navcam,
-                pan,
-                tilt,
+                navcam::Pair::Navcam { pan, tilt },
                 sim.time(),
                 image_seed.random(),
             )

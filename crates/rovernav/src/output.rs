@@ -110,3 +110,21 @@ pub fn print_evaluation<T: serde::Serialize>(
     }
     Ok(())
 }
+
+/// Median of `values` (the mean of the two middle values for an even count; NaN when empty):
+/// the campaign summary's definition, so every figure uses one.
+pub fn median(values: &[f64]) -> f64 {
+    rovernav_campaign::summary::median(values).unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod median_tests {
+    use super::median;
+
+    #[test]
+    fn median_of_odd_and_even() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(&[]).is_nan());
+    }
+}

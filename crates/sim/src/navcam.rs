@@ -28,8 +28,37 @@ impl Default for NavcamImaging {
     }
 }
 
-/// Renders the Navcam pair (left, right) with the head at body-frame `pan` and `tilt` (rad) from
-/// the rover's true pose at simulation time `time`; `seed` draws the sensor noise.
+/// Which stereo pair to render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Pair {
+    /// The Navcams, with the head at body-frame `pan` and `tilt` (rad).
+    Navcam {
+        /// Head pan (rad).
+        pan: f64,
+        /// Head tilt (rad).
+        tilt: f64,
+    },
+    /// A body (Hazcam) pair, front or rear, at the Navcams' image size (the mast head stays
+    /// forward): pictures for the tooling arm's terrain model.
+    Body {
+        /// Front pair when true, rear otherwise.
+        front: bool,
+    },
+}
+
+impl Pair {
+    /// The rig's camera names (left, right) and the head's pan and tilt.
+    fn cameras(self) -> ([&'static str; 2], f64, f64) {
+        match self {
+            Pair::Navcam { pan, tilt } => (["navcam_left", "navcam_right"], pan, tilt),
+            Pair::Body { front: true } => (["hazcam_front_left", "hazcam_front_right"], 0.0, 0.0),
+            Pair::Body { front: false } => (["hazcam_rear_left", "hazcam_rear_right"], 0.0, 0.0),
+        }
+    }
+}
+
+/// Renders a stereo pair (left, right) from the rover's true pose at simulation time `time`;
+/// `seed` draws the sensor noise.
 #[allow(clippy::too_many_arguments)]
 pub fn capture_pair(
     terrain: &Terrain,
@@ -38,37 +67,13 @@ pub fn capture_pair(
     truth: &Pose3,
     lighting: &StereoImaging,
     navcam: &NavcamImaging,
-    pan: f64,
-    tilt: f64,
+    pair: Pair,
     time: f64,
     seed: u64,
 ) -> [CameraImage; 2] {
     let shot = Shot { terrain, field, rover, truth, lighting, navcam, time, seed };
-    shot.render(["navcam_left", "navcam_right"], pan, tilt)
-}
-
-/// Renders both images of a body (Hazcam) stereo pair, front or rear, at the Navcams' image
-/// size from the rover's true pose (the mast head stays forward): pictures for the tooling
-/// arm's terrain model.
-#[allow(clippy::too_many_arguments)]
-pub fn capture_body_pair(
-    terrain: &Terrain,
-    field: &HeightField,
-    rover: &RoverConfig,
-    truth: &Pose3,
-    lighting: &StereoImaging,
-    navcam: &NavcamImaging,
-    front: bool,
-    time: f64,
-    seed: u64,
-) -> [CameraImage; 2] {
-    let shot = Shot { terrain, field, rover, truth, lighting, navcam, time, seed };
-    let names = if front {
-        ["hazcam_front_left", "hazcam_front_right"]
-    } else {
-        ["hazcam_rear_left", "hazcam_rear_right"]
-    };
-    shot.render(names, 0.0, 0.0)
+    let (names, pan, tilt) = pair.cameras();
+    shot.render(names, pan, tilt)
 }
 
 /// What one rendered pair shares: the world, the pose, the light and the time.
@@ -131,8 +136,7 @@ mod tests {
             &truth,
             &StereoImaging::default(),
             &navcam,
-            0.0,
-            -0.4,
+            Pair::Navcam { pan: 0.0, tilt: -0.4 },
             10.0,
             7,
         );

@@ -296,13 +296,14 @@ impl Simulator {
 
     /// Takes one range image.
     fn sense(&mut self, request: &SenseRequest, frame: &mut SensorFrame) {
-        if let SenseRequest::Navcam { pan, tilt } = *request {
-            self.take_pictures(pan, tilt, frame);
-            return;
-        }
-        if let SenseRequest::BodyPair { front } = *request {
-            self.take_body_pictures(front, frame);
-            return;
+        match *request {
+            SenseRequest::Navcam { pan, tilt } => {
+                return self.take_pictures(navcam::Pair::Navcam { pan, tilt }, frame);
+            }
+            SenseRequest::BodyPair { front } => {
+                return self.take_pictures(navcam::Pair::Body { front }, frame);
+            }
+            _ => {}
         }
         let (geometry, imager) = match *request {
             SenseRequest::Mast { pan } => {
@@ -370,42 +371,21 @@ impl Simulator {
         frame.clouds.push(cloud);
     }
 
-    /// Takes the Navcam pair at `pan` and `tilt` (rad): pictures, no range, not a sensing action.
-    fn take_pictures(&mut self, pan: f64, tilt: f64, frame: &mut SensorFrame) {
+    /// Takes a stereo pair's pictures: no range, not a sensing action.
+    fn take_pictures(&mut self, pair: navcam::Pair, frame: &mut SensorFrame) {
         let seed: u64 = self.image_rng.random();
-        let pair = navcam::capture_pair(
+        let images = navcam::capture_pair(
             &self.terrain,
             &self.field,
             &self.rover,
             &self.truth,
             &self.model.stereo,
             &self.model.navcam,
-            pan,
-            tilt,
+            pair,
             self.time,
             seed,
         );
-        frame.images.extend(pair);
-        let dt = self.model.navcam.capture_time_s.max(0.0);
-        self.time += dt;
-        self.proprio.elapse(&self.model, dt);
-    }
-
-    /// Takes both images of a body stereo pair: pictures, no range, not a sensing action.
-    fn take_body_pictures(&mut self, front: bool, frame: &mut SensorFrame) {
-        let seed: u64 = self.image_rng.random();
-        let pair = navcam::capture_body_pair(
-            &self.terrain,
-            &self.field,
-            &self.rover,
-            &self.truth,
-            &self.model.stereo,
-            &self.model.navcam,
-            front,
-            self.time,
-            seed,
-        );
-        frame.images.extend(pair);
+        frame.images.extend(images);
         let dt = self.model.navcam.capture_time_s.max(0.0);
         self.time += dt;
         self.proprio.elapse(&self.model, dt);
