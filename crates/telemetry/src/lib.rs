@@ -29,4 +29,4 @@ pub use reader::{LogEnd, LoggedRun, ReplayedRun, parse_log, read_log};
 pub use recorder::TelemetryRecorder;
 /// The derived JSON Schemas and their checker (the bus crate's, shared by the log).
 pub use rovernav_bus::schema;
-pub use writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
+pub use writer::{FlushPolicy, LiveSink, LogStats, TelemetryError, TelemetryWriter};

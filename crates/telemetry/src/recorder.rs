@@ -68,6 +68,14 @@ impl TelemetryRecorder<BufWriter<File>> {
     pub fn create(path: &Path) -> Result<Self, TelemetryError> {
         Self::new(TelemetryWriter::create(path, FlushPolicy::default())?)
     }
+
+    /// Opens a log file as [`TelemetryRecorder::create`] does, and sends every topic and message
+    /// it writes to `sink` as well (a live view of the run).
+    pub fn create_with_tee(path: &Path, sink: Box<dyn crate::LiveSink>) -> Result<Self, TelemetryError> {
+        let mut writer = TelemetryWriter::create(path, FlushPolicy::default())?;
+        writer.set_tee(sink);
+        Self::new(writer)
+    }
 }
 
 impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {

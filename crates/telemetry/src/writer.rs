@@ -97,9 +97,20 @@ struct ChannelState {
     sequence: u32,
 }
 
+/// A live consumer of everything a log writes (the web console, the Foxglove server): told of
+/// each topic as it is declared and of each message as it is written, so that what is shown
+/// live is exactly what the log holds.
+pub trait LiveSink: Send {
+    /// A topic was declared with its schema name and JSON Schema.
+    fn topic(&mut self, topic: &str, schema_name: &str, schema: &Value);
+    /// A message (JSON) was written on a declared topic at `time_ns` (simulated time).
+    fn message(&mut self, topic: &str, time_ns: u64, json: &[u8]);
+}
+
 /// Writes JSON messages on named topics to an MCAP file.
 pub struct TelemetryWriter<W: Write + Seek = BufWriter<File>> {
     writer: Writer<W>,
+    tee: Option<Box<dyn LiveSink>>,
     path: PathBuf,
     channels: HashMap<String, ChannelState>,
     policy: FlushPolicy,
@@ -137,6 +148,7 @@ impl<W: Write + Seek> TelemetryWriter<W> {
             .map_err(|error| TelemetryError::Mcap { path: path.to_path_buf(), error })?;
         Ok(Self {
             writer,
+            tee: None,
             path: path.to_path_buf(),
             channels: HashMap::new(),
             policy,
@@ -144,6 +156,11 @@ impl<W: Write + Seek> TelemetryWriter<W> {
             chunk_bytes: 0,
             stats: LogStats::default(),
         })
+    }
+
+    /// Sends every topic declared from now on, and every message, to `sink` as well.
+    pub fn set_tee(&mut self, sink: Box<dyn LiveSink>) {
+        self.tee = Some(sink);
     }
 
     fn mcap_err(&self) -> impl Fn(mcap::McapError) -> TelemetryError + '_ {
@@ -165,6 +182,9 @@ impl<W: Write + Seek> TelemetryWriter<W> {
         let schema_id = self.writer.add_schema(schema_name, "jsonschema", &data).map_err(self.mcap_err())?;
         let id = self.writer.add_channel(schema_id, topic, "json", metadata).map_err(self.mcap_err())?;
         self.channels.insert(topic.to_string(), ChannelState { id, sequence: 0 });
+        if let Some(tee) = self.tee.as_mut() {
+            tee.topic(topic, schema_name, schema);
+        }
         Ok(())
     }
 
@@ -201,6 +221,9 @@ impl<W: Write + Seek> TelemetryWriter<W> {
             publish_time: time_ns,
         };
         self.writer.write_to_known_channel(&header, data).map_err(self.mcap_err())?;
+        if let Some(tee) = self.tee.as_mut() {
+            tee.message(topic, time_ns, data);
+        }
         self.chunk_bytes += data.len() as u64;
         self.stats.messages += 1;
         self.stats.message_bytes += data.len() as u64;
