@@ -4,7 +4,8 @@
 //! data) with a georeference that maps its local metric frame to projected map coordinates.
 //! `ops` adds its queries (gradient, slope, normal, min/max) and transforms (crop, resample);
 //! `io` loads GeoTIFF, PDS3 and `.npy` files (the only module that touches files);
-//! `procedural` builds seeded Mars yards and puts rock fields on real DEMs.
+//! `procedural` builds seeded Mars yards and puts rock fields on real DEMs;
+//! `tiled` generates the yard model in tiles on demand, for terrain without edges.
 
 #![warn(missing_docs)]
 
@@ -12,6 +13,7 @@ pub mod dem;
 pub mod io;
 pub mod ops;
 pub mod procedural;
+pub mod tiled;
 
 pub use dem::{Dem, GeoReference, Rock, Terrain};
 pub use io::LoadError;

@@ -157,7 +157,7 @@ impl Crater {
 
 /// Distance, in crater radii, a crater's centre keeps from a clear pad's edge: beyond 1.5 radii
 /// the ejecta rises at most 1 % of the diameter.
-const PAD_CRATER_CLEARANCE: f64 = 1.5;
+pub(crate) const PAD_CRATER_CLEARANCE: f64 = 1.5;
 
 /// Ejecta blanket radius in crater radii.
 const CRATER_REACH: f64 = 2.5;
@@ -190,7 +190,7 @@ pub fn sample_craters(params: &MarsYardParams, area: LocalRect, rng: &mut impl R
 }
 
 /// Derives an independent 32-bit noise seed from the yard seed and a purpose tag.
-fn sub_seed(seed: u64, tag: u64) -> u32 {
+pub(crate) fn sub_seed(seed: u64, tag: u64) -> u32 {
     // splitmix64 finaliser
     let mut z = seed ^ tag.wrapping_mul(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -209,44 +209,81 @@ fn stream(seed: u64, purpose: u64) -> ChaCha8Rng {
 const STREAM_CRATERS: u64 = 1;
 const STREAM_ROCKS: u64 = 2;
 
+/// The smooth part of a yard's ground: fractal relief, ridges and the regional slope (no
+/// craters, no rocks), a function of world coordinates alone, so any grid or tile of the same
+/// parameters samples one continuous surface.
+#[derive(Clone, Debug)]
+pub struct Relief {
+    amplitude: f64,
+    relief_seed: u32,
+    ridge_seed: u32,
+    inv_wave: f64,
+    gain: f64,
+    octaves: u32,
+    ridge_amplitude: f64,
+    ridge_cos: f64,
+    ridge_sin: f64,
+    inv_ridge: f64,
+    tan_slope: f64,
+    slope_cos: f64,
+    slope_sin: f64,
+}
+
+impl Relief {
+    /// The relief of a yard's parameters.
+    pub fn new(params: &MarsYardParams) -> Self {
+        let (ridge_cos, ridge_sin) = {
+            let a = params.ridge_azimuth_deg.to_radians();
+            (a.cos(), a.sin())
+        };
+        let (slope_cos, slope_sin) = {
+            let a = params.slope_azimuth_deg.to_radians();
+            (a.cos(), a.sin())
+        };
+        Self {
+            amplitude: params.relief_amplitude_m,
+            relief_seed: sub_seed(params.seed, 11),
+            ridge_seed: sub_seed(params.seed, 12),
+            inv_wave: 1.0 / params.relief_wavelength_m.max(1e-6),
+            gain: params.roughness.clamp(0.0, 1.0),
+            octaves: params.relief_octaves.min(16),
+            ridge_amplitude: params.ridge_amplitude_m,
+            ridge_cos,
+            ridge_sin,
+            inv_ridge: 1.0 / params.ridge_wavelength_m.max(1e-6),
+            tan_slope: params.regional_slope_deg.to_radians().tan(),
+            slope_cos,
+            slope_sin,
+        }
+    }
+
+    /// Height (m) at a world point.
+    pub fn height(&self, x: f64, y: f64) -> f64 {
+        let inv_wave = self.inv_wave;
+        let mut z = self.amplitude
+            * noise::fbm(x * inv_wave, y * inv_wave, self.relief_seed, self.octaves, self.gain);
+        if self.ridge_amplitude != 0.0 {
+            // Across-ridge coordinate at the ridge spacing, along-ridge stretched four times,
+            // so crests run along the azimuth; centred so ridges add no net height.
+            let across = (-x * self.ridge_sin + y * self.ridge_cos) * self.inv_ridge;
+            let along = (x * self.ridge_cos + y * self.ridge_sin) * self.inv_ridge * 0.25;
+            z += self.ridge_amplitude * (noise::ridged(across, along, self.ridge_seed, 3, 0.45) - 0.5);
+        }
+        z + self.tan_slope * (x * self.slope_cos + y * self.slope_sin)
+    }
+}
+
 /// The ground of a yard (relief, ridges, slope, craters) without rocks.
 pub fn generate_ground(params: &MarsYardParams) -> Dem {
     let geometry = ground_geometry(params);
     let (cols, rows, res) = (geometry.cols, geometry.rows, geometry.resolution);
-
-    let relief_seed = sub_seed(params.seed, 11);
-    let ridge_seed = sub_seed(params.seed, 12);
-    let inv_wave = 1.0 / params.relief_wavelength_m.max(1e-6);
-    let gain = params.roughness.clamp(0.0, 1.0);
-    let octaves = params.relief_octaves.min(16);
-    let (ridge_cos, ridge_sin) = {
-        let a = params.ridge_azimuth_deg.to_radians();
-        (a.cos(), a.sin())
-    };
-    let inv_ridge = 1.0 / params.ridge_wavelength_m.max(1e-6);
-    let tan_slope = params.regional_slope_deg.to_radians().tan();
-    let (slope_cos, slope_sin) = {
-        let a = params.slope_azimuth_deg.to_radians();
-        (a.cos(), a.sin())
-    };
-    let with_ridges = params.ridge_amplitude_m != 0.0;
-
+    let relief = Relief::new(params);
     let mut data = Vec::with_capacity(geometry.len());
     for r in 0..rows {
         let y = (r as f64 + 0.5) * res;
         for c in 0..cols {
             let x = (c as f64 + 0.5) * res;
-            let mut z = params.relief_amplitude_m
-                * noise::fbm(x * inv_wave, y * inv_wave, relief_seed, octaves, gain);
-            if with_ridges {
-                // Across-ridge coordinate at the ridge spacing, along-ridge stretched four
-                // times, so crests run along the azimuth; centred so ridges add no net height.
-                let across = (-x * ridge_sin + y * ridge_cos) * inv_ridge;
-                let along = (x * ridge_cos + y * ridge_sin) * inv_ridge * 0.25;
-                z += params.ridge_amplitude_m * (noise::ridged(across, along, ridge_seed, 3, 0.45) - 0.5);
-            }
-            z += tan_slope * (x * slope_cos + y * slope_sin);
-            data.push(z as f32);
+            data.push(relief.height(x, y) as f32);
         }
     }
     let mut dem = Dem {
