@@ -176,6 +176,29 @@ pub struct SensorFrame {
     pub motion_stopped: Option<String>,
     /// Camera images taken during the command (the left image of each correlated stereo pair).
     pub images: Vec<CameraImage>,
+    /// The power system's reading at the end of the command (absent from platforms without one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub power: Option<PowerReading>,
+}
+
+/// The power system's telemetry (SR2's current and voltage sensors on the solar panel and the
+/// system, paper 001 section 3): all the autonomy knows of its energy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PowerReading {
+    /// Time of the reading (s).
+    pub t: f64,
+    /// Battery state of charge (0 empty .. 1 full).
+    pub state_of_charge: f64,
+    /// Energy in the battery (Wh).
+    pub battery_wh: f64,
+    /// Solar panel output at the reading (W).
+    pub panel_w: f64,
+    /// Computer load, mean over the command (W).
+    pub computer_w: f64,
+    /// Drive motors' load, mean over the command (W).
+    pub motors_w: f64,
+    /// Cameras' load, mean over the command (W).
+    pub cameras_w: f64,
 }
 
 /// Range error of one range sensor: standard deviation `constant + quadratic * r^2` at range `r`

@@ -170,7 +170,7 @@ impl ToolingArm {
     /// Deploys the arm for `duration` seconds from `now`: holds the platform still meanwhile.
     fn deploy(&mut self, bus: &mut Bus, task: u64, action: ArmAction, until_s: f64) -> Result<(), BusError> {
         self.work = Some(ArmWork { task, action, phase: Phase::Deployed { until_s, counts: self.counts } });
-        bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s })
+        bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s, sleep: false })
     }
 
     /// Asks the platform for the imaging sequence of a placement: back one step, the

@@ -22,6 +22,7 @@ pub mod messages;
 pub mod mission;
 pub mod operator;
 pub mod platform;
+pub mod power;
 pub mod reflexive;
 pub mod remote;
 pub mod report;

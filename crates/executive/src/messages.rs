@@ -167,6 +167,9 @@ pub struct MotionRequest {
 pub struct HoldMsg {
     /// Simulated time to hold until (s).
     pub until_s: f64,
+    /// Hold in the power system's sleep mode (no sampling until the end; SR2's SLEEP mode).
+    #[serde(default)]
+    pub sleep: bool,
 }
 
 /// What produced a frame.
@@ -398,6 +401,7 @@ mod tests {
                 pan: 0.25,
                 tilt: -0.5,
             }],
+            power: Some(rovernav_core::PowerReading { t: 12.3, state_of_charge: 0.5, ..Default::default() }),
         }
     }
 
@@ -474,7 +478,7 @@ mod tests {
             keep_out: vec![vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(0.0, 1.0)]],
         };
         plain(DriveToMsg { task: 1, goal });
-        plain(HoldMsg { until_s: 30.0 });
+        plain(HoldMsg { until_s: 30.0, sleep: false });
         plain(CancelMsg { task: 2 });
         for action in [ArmAction::PlaceInstrument, ArmAction::Scoop] {
             plain(ArmTaskMsg { task: 3, action, target: [1.0, 2.0] });

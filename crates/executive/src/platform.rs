@@ -167,13 +167,18 @@ impl SimPlatform {
     }
 
     /// Rests, sampling, until `until_s` (one frame for the whole hold; nothing if the clock is
-    /// there already). The runtime's clock moving past the platform's is a hold too.
-    fn hold(&mut self, bus: &mut Bus, until_s: f64) -> Result<(), BusError> {
+    /// there already), or sleeps without sampling when `sleep` is set. The runtime's clock
+    /// moving past the platform's is a hold too.
+    fn hold(&mut self, bus: &mut Bus, until_s: f64, sleep: bool) -> Result<(), BusError> {
         let until = until_s.min(self.sim.time() + MAX_HOLD_S);
         if until.is_nan() || until <= self.sim.time() {
             return Ok(());
         }
         self.inject_due(self.executed_count + 1);
+        if sleep {
+            let frame = self.sim.sleep(until);
+            return self.publish_frame(bus, FrameSource::Hold, &frame);
+        }
         let mut frame = SensorFrame::default();
         while self.sim.time() < until - 1e-9 {
             // An empty sense request is one sample period at rest.
@@ -181,6 +186,7 @@ impl SimPlatform {
             frame.imu.extend(rest.imu);
             frame.odometry.extend(rest.odometry);
             frame.proximity = rest.proximity;
+            frame.power = rest.power;
             frame.t = rest.t;
         }
         self.publish_frame(bus, FrameSource::Hold, &frame)
@@ -220,9 +226,12 @@ impl SimPlatform {
         Ok(())
     }
 
-    fn take_holds(&mut self, bus: &mut Bus) -> Result<Option<f64>, BusError> {
+    /// The latest time the holds asked for, and whether any asked to sleep.
+    fn take_holds(&mut self, bus: &mut Bus) -> Result<Option<(f64, bool)>, BusError> {
         let Some(holds) = &self.holds else { return Ok(None) };
-        Ok(bus.take(holds)?.iter().map(|h| h.until_s).filter(|t| t.is_finite()).reduce(f64::max))
+        let holds = bus.take(holds)?;
+        let sleep = holds.iter().any(|h| h.sleep);
+        Ok(holds.iter().map(|h| h.until_s).filter(|t| t.is_finite()).reduce(f64::max).map(|t| (t, sleep)))
     }
 }
 
@@ -256,7 +265,7 @@ impl Component for SimPlatform {
     }
 
     fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
-        self.hold(ctx.bus, ctx.time_s)?;
+        self.hold(ctx.bus, ctx.time_s, false)?;
         let commands = match &self.commands {
             Some(s) => ctx.bus.take(s)?,
             None => Vec::new(),
@@ -264,8 +273,8 @@ impl Component for SimPlatform {
         for request in commands {
             self.execute(ctx.bus, (*request).clone())?;
         }
-        if let Some(until) = self.take_holds(ctx.bus)? {
-            self.hold(ctx.bus, until)?;
+        if let Some((until, sleep)) = self.take_holds(ctx.bus)? {
+            self.hold(ctx.bus, until, sleep)?;
         }
         Ok(())
     }
@@ -273,7 +282,7 @@ impl Component for SimPlatform {
     /// Standing by or stopped, the wheels stay locked (commands are refused) but the sensors
     /// keep sampling through holds.
     fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
-        self.hold(ctx.bus, ctx.time_s)?;
+        self.hold(ctx.bus, ctx.time_s, false)?;
         let commands = match &self.commands {
             Some(s) => ctx.bus.take(s)?,
             None => Vec::new(),
@@ -293,8 +302,8 @@ impl Component for SimPlatform {
                 )?;
             }
         }
-        if let Some(until) = self.take_holds(ctx.bus)? {
-            self.hold(ctx.bus, until)?;
+        if let Some((until, sleep)) = self.take_holds(ctx.bus)? {
+            self.hold(ctx.bus, until, sleep)?;
         }
         Ok(())
     }

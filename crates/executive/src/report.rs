@@ -67,6 +67,9 @@ pub struct Report {
     /// The localiser's correction counters (null when unknown, e.g. recomputed from a cut-off log).
     #[serde(default)]
     pub localization_stats: Option<LocalizationStats>,
+    /// The battery and the rover's sleep (absent without power readings).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub power: Option<crate::power::PowerReport>,
 }
 
 /// The localiser's counters: terrain-matching fixes used and rejected, zero-velocity updates, slip

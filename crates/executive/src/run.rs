@@ -214,6 +214,8 @@ pub struct RunOptions {
     pub arm: ArmConfig,
     /// The bus.
     pub bus: BusKind,
+    /// Sleep and wake thresholds on the battery's charge (`[power]`).
+    pub power: crate::power::PowerPolicy,
 }
 
 impl RunOptions {
@@ -224,6 +226,7 @@ impl RunOptions {
             tasks: mission.plan_tasks(&to_local),
             faults: mission.fault_schedule(),
             crashes: mission.crash_schedule(),
+            power: mission.power.policy(),
             ..Self::default()
         }
     }

@@ -215,6 +215,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         platform_s: runtime.busy_s("platform"),
     };
     let message = crate::report::run_message(outcome, &message, scoring.goal_error_m);
+    let message = crate::power::with_sleep(message, deliberative.power_report().as_ref());
     let injected = injected_faults(&runtime, &crashed, &scoring, remote);
     let report = Report {
         outcome: outcome.as_str().into(),
@@ -266,6 +267,7 @@ fn wire_deliberative(
     };
     let deliberative = Deliberative::new(runtime.bus(), &world.goal, &options.tasks, config)?
         .with_rover(world.rover.clone(), world.sensor_model.navcam.width)
+        .with_power(options.power)
         .with_area({
             let g = world.terrain.dem.geometry();
             [g.origin_x, g.origin_y, g.origin_x + g.width_m(), g.origin_y + g.height_m()]
@@ -353,6 +355,7 @@ fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
                     .map(|p| p.report()),
             })
             .collect(),
+        power: deliberative.power_report(),
         ..Report::default()
     }
 }

@@ -79,7 +79,7 @@ pub fn rover_config(mission: &Mission) -> RoverConfig {
 /// Builds the world of a mission; `origin` names the mission in error messages.
 pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError> {
     let rover = rover_config(mission);
-    let mut sensor_model = SensorModel::default();
+    let mut sensor_model = SensorModel { power: mission.power.config(), ..SensorModel::default() };
     if let Some(s) = mission.sensors.compass_sigma_deg {
         sensor_model.compass_sigma = s.to_radians();
     }

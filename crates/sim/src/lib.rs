@@ -9,6 +9,7 @@
 
 pub mod hazard;
 pub mod navcam;
+pub mod power;
 pub mod raycast;
 pub mod render;
 pub mod scenes;
@@ -19,6 +20,7 @@ pub mod vehicle;
 
 pub use hazard::true_hazard_grid;
 pub use navcam::NavcamImaging;
+pub use power::{PowerConfig, PowerModel};
 pub use raycast::{HeightField, RayHit};
 pub use sensors::{LidarModel, ProximityModel, RangeImagerModel, SensorModel};
 pub use simulator::{Fault, Simulator};

@@ -136,6 +136,9 @@ pub struct SensorModel {
     /// How the Navcam pair images on request.
     #[serde(skip)]
     pub navcam: crate::navcam::NavcamImaging,
+    /// The solar panel, battery and loads (the mission's `[power]`).
+    #[serde(skip)]
+    pub power: crate::power::PowerConfig,
 }
 
 impl Default for SensorModel {
@@ -228,6 +231,7 @@ impl Default for SensorModel {
             range_source: RangeSource::default(),
             stereo: StereoImaging::default(),
             navcam: crate::navcam::NavcamImaging::default(),
+            power: crate::power::PowerConfig::default(),
         }
     }
 }

@@ -18,6 +18,7 @@ use rovernav_core::{
 use rovernav_terrain::Terrain;
 
 use crate::navcam;
+use crate::power::PowerModel;
 use crate::raycast::HeightField;
 use crate::sensors::{self, Proprioception, RangeGeometry, SensorModel, gaussian};
 use crate::stereo_range::{self, RangeSource};
@@ -81,6 +82,8 @@ pub struct Simulator {
     faults: Faults,
     /// The proximity reading that stopped the current motion, if a guard did.
     guard_reading: Option<ProximityReading>,
+    /// The solar panel, battery and loads.
+    power: PowerModel,
 }
 
 /// A random stream of the run seed.
@@ -128,6 +131,7 @@ impl Simulator {
             image_rng: stream(seed, 5),
             faults: Faults::default(),
             guard_reading: None,
+            power: PowerModel::new(sensors.power.clone()),
             terrain,
             rover,
             model: sensors,
@@ -160,6 +164,7 @@ impl Simulator {
             NavCommand::Finish(..) => {}
         }
         frame.t = self.time;
+        frame.power = Some(self.power.reading());
         // A proximity guard stop reports the reading that stopped the motion.
         frame.proximity = match self.guard_reading.take() {
             Some(reading) => reading,
@@ -177,7 +182,32 @@ impl Simulator {
         }
         frame.t = self.time;
         frame.proximity = self.read_proximity();
+        frame.power = Some(self.power.reading());
         frame
+    }
+
+    /// Sleeps until `until_s` (the computer in its sleep mode, motors and cameras off, no
+    /// sampling), then wakes for one sample at rest (SR2's SLEEP mode, paper 001 section 3).
+    pub fn sleep(&mut self, until_s: f64) -> SensorFrame {
+        let dt = until_s - self.time;
+        if dt.is_finite() && dt > 0.0 {
+            self.power.set_asleep(true);
+            self.time = until_s;
+            self.proprio.elapse(&self.model, dt);
+            self.power.advance(self.time, 0.0, 0);
+            self.power.set_asleep(false);
+        }
+        let mut frame = SensorFrame::default();
+        self.rest_sample(&mut frame);
+        frame.t = self.time;
+        frame.proximity = self.read_proximity();
+        frame.power = Some(self.power.reading());
+        frame
+    }
+
+    /// The power system (truth: its totals are for scoring and tests).
+    pub fn power(&self) -> &PowerModel {
+        &self.power
     }
 
     /// Injects a fault; it stays until the end of the run.
@@ -271,6 +301,7 @@ impl Simulator {
         let period = 1.0 / self.model.sample_rate.max(1e-3);
         self.time += period;
         self.proprio.elapse(&self.model, period);
+        self.power.advance(self.time, 0.0, 0);
         self.push_sample(frame, 0.0);
     }
 
@@ -367,6 +398,8 @@ impl Simulator {
         let dt = imager.capture_time.max(0.0);
         self.time += dt;
         self.proprio.elapse(&self.model, dt);
+        // A stereo pair's two images, or a LIDAR nod counted as much.
+        self.power.advance(self.time, 0.0, 2);
         self.sensing_actions += 1;
         frame.clouds.push(cloud);
     }
@@ -385,10 +418,12 @@ impl Simulator {
             self.time,
             seed,
         );
+        let taken = images.len() as u32;
         frame.images.extend(images);
         let dt = self.model.navcam.capture_time_s.max(0.0);
         self.time += dt;
         self.proprio.elapse(&self.model, dt);
+        self.power.advance(self.time, 0.0, taken);
     }
 
     /// Moves the wheels: `centre` metres of signed centre-line wheel travel and `rotation`
@@ -476,6 +511,8 @@ impl Simulator {
             self.time += dt;
             elapsed += dt;
             self.proprio.elapse(&self.model, dt);
+            let motors = self.power.motors_w(wheels, dt, grade);
+            self.power.advance(self.time, motors, 0);
             self.push_sample(frame, d_yaw / dt);
             if self.faults.stalled_left.is_some() && elapsed >= STALL_DETECT_TIME {
                 let side = if self.faults.stalled_left == Some(true) { "left" } else { "right" };

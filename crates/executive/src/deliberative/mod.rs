@@ -108,6 +108,8 @@ pub struct Deliberative {
     direct: Vec<direct::DirectMotion>,
     /// Tasks the operator queued whose end has not been answered yet.
     operator_tasks: Vec<u64>,
+    /// Sleep and wake on the battery's charge.
+    sleep: crate::power::SleepMonitor,
 }
 
 impl Deliberative {
@@ -121,6 +123,7 @@ impl Deliberative {
             Port::of(topics::LOCALIZATION_RESET),
             Port::of(topics::SYSTEM_CONTROL),
             Port::of(topics::OPERATOR_REPLY),
+            Port::of(topics::PLATFORM_HOLD),
         ]
     }
 
@@ -161,6 +164,7 @@ impl Deliberative {
             area: None,
             direct: Vec::new(),
             operator_tasks: Vec::new(),
+            sleep: crate::power::SleepMonitor::new(crate::power::PowerPolicy::default()),
         };
         for w in &goal.waypoints {
             me.push(TaskKind::DriveTo { target: *w, tolerance: goal.tolerance }, false, Role::Waypoint);
@@ -185,6 +189,17 @@ impl Deliberative {
     pub fn with_area(mut self, area: [f64; 4]) -> Self {
         self.area = Some(area);
         self
+    }
+
+    /// Sleep and wake thresholds on the battery's charge (default [`crate::power::PowerPolicy`]).
+    pub fn with_power(mut self, policy: crate::power::PowerPolicy) -> Self {
+        self.sleep = crate::power::SleepMonitor::new(policy);
+        self
+    }
+
+    /// The report's power figures (none when the platform gave no reading).
+    pub fn power_report(&self) -> Option<crate::power::PowerReport> {
+        self.sleep.report(self.time_s)
     }
 
     fn push(&mut self, kind: TaskKind, parallel: bool, role: Role) {
@@ -276,6 +291,9 @@ impl Deliberative {
             let why = "operator input ended while the mission was waiting for the operator".to_string();
             return self.finish(bus, Outcome::Aborted, why);
         }
+        if self.state == MissionState::Running && self.power_step(bus)? {
+            return Ok(());
+        }
         if self.state == MissionState::Running {
             self.pump_watches(bus)?;
             self.pump_approaches(bus)?;
@@ -294,6 +312,9 @@ impl Deliberative {
             self.watch_frame(f);
             self.approach_frame(f);
             self.time_s = f.t;
+            if let Some(p) = &f.power {
+                self.sleep.on_reading(p);
+            }
             if f.request().is_some() {
                 self.cycles += 1;
                 if let Some(e) = &self.estimate
@@ -433,6 +454,31 @@ impl Deliberative {
             format!("fault protection ({}): {}; rover stopped, asking for help", d.kind.as_str(), d.message);
         self.diagnosis = Some((d, self.cycles, self.time_s));
         self.finish(bus, Outcome::HelpRequested, why)
+    }
+
+    /// Sleeps below the low threshold of charge and wakes at the high one (SR2's SLEEP mode):
+    /// asleep, the navigator stands by and the platform holds in its sleep mode. Whether the
+    /// rover is (still) asleep.
+    fn power_step(&mut self, bus: &mut Bus) -> Result<bool, BusError> {
+        use crate::messages::HoldMsg;
+        use crate::power::SleepAction;
+        match self.sleep.decide(self.time_s) {
+            SleepAction::Awake => Ok(false),
+            SleepAction::Sleep(until_s) => {
+                self.control(bus, Some("navigator"), ControlAction::Standby)?;
+                self.fp.set_target(None);
+                bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s, sleep: true })?;
+                Ok(true)
+            }
+            SleepAction::StayAsleep(until_s) => {
+                bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s, sleep: true })?;
+                Ok(true)
+            }
+            SleepAction::Wake => {
+                self.control(bus, Some("navigator"), ControlAction::Resume)?;
+                Ok(false)
+            }
+        }
     }
 
     fn control(

@@ -5,6 +5,7 @@
 
 pub mod check;
 mod faults;
+mod power;
 mod route;
 mod sensors;
 mod sky;
@@ -14,6 +15,7 @@ mod terrain;
 pub use faults::{
     DEFAULT_GYRO_JUMP_DEG_S, FaultKindName, FaultSpec, SensorName, Side, check as check_faults,
 };
+pub use power::PowerSpec;
 pub use route::{GoalSpec, PoseSpec};
 pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
 pub use sky::{SkyKind, SkySpec};
@@ -82,6 +84,9 @@ pub struct Mission {
     /// Clouds and dust devils in the simulated sky (`[[sky]]`).
     #[serde(default)]
     pub sky: Vec<SkySpec>,
+    /// The solar panel, battery, loads and sleep thresholds (`[power]`; defaults: a small rover).
+    #[serde(default)]
+    pub power: PowerSpec,
     /// Folder the mission file was read from (relative DEM paths resolve against it first).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -298,6 +303,9 @@ impl Mission {
         }
         if let Err((field, why)) = sky::check(&self.sky) {
             return bad(&field, why);
+        }
+        if let Err((field, why)) = self.power.check() {
+            return bad(&format!("power.{field}"), &why);
         }
         Ok(())
     }

@@ -180,6 +180,7 @@ impl SensorFrameMsg {
             proximity: f.proximity,
             motion_stopped: f.motion_stopped.clone(),
             images: Vec::new(),
+            power: f.power,
         };
         Self { cycle, frame }
     }
@@ -344,6 +345,7 @@ pub(crate) mod tests {
             },
             motion_stopped: Some("proximity".into()),
             images: Vec::new(),
+            power: None,
         }
     }
 
