@@ -7,7 +7,7 @@
 mod common;
 
 use rovernav_core::{DriveGuard, NavCommand, Pose2, RoverConfig, SenseRequest};
-use rovernav_executive::{Mission, Run};
+use rovernav_executive::{Mission, Run, ScriptedOperator};
 use rovernav_sim::render::Sun;
 use rovernav_sim::{PowerConfig, SensorModel, Simulator};
 use rovernav_terrain::{Dem, Terrain};
@@ -142,8 +142,14 @@ fn a_mission_starting_with_a_low_battery_sleeps_until_the_sun_charges_it_then_re
 #[test]
 fn sleep_counts_against_the_mission_time_budget() {
     let mission = low_battery_mission(3000.0);
-    let run = Run::mission(&mission, "low battery, short budget").and_then(Run::execute).expect("runs");
+    let mut operator = ScriptedOperator::new(&[(0, "status")]);
+    let run = Run::mission(&mission, "low battery, short budget")
+        .and_then(|run| run.operator(&mut operator).execute())
+        .expect("runs");
     let r = &run.report;
+    // The operator's `status` gives the power meters (SR2's engineering panel).
+    let status = operator.reply_containing("power: battery").expect("status answers with power");
+    assert!(status.contains("power: battery 10 % (15.0 Wh) · panel "), "{status}");
     assert_eq!(r.outcome, "timeout", "{}", r.message);
     let power = r.power.expect("power in the report");
     assert!(power.time_asleep_s >= 2900.0, "{power:?}");

@@ -268,6 +268,18 @@ impl Deliberative {
                 out.push_str(&format!(": {}", t.message));
             }
         }
+        if let Some(p) = self.sleep.last() {
+            out.push_str(&format!(
+                "\npower: battery {:.0} % ({:.1} Wh) · panel {:.1} W · computer {:.1} W, motors {:.1} W, cameras {:.1} W{}",
+                100.0 * p.state_of_charge,
+                p.battery_wh,
+                p.panel_w,
+                p.computer_w,
+                p.motors_w,
+                p.cameras_w,
+                if self.sleep.asleep() { " · asleep, waiting for charge" } else { "" }
+            ));
+        }
         let states: Vec<String> = self.components.iter().map(|(n, (s, _))| format!("{n} {s}")).collect();
         out.push_str(&format!("\ncomponents: {}", states.join(", ")));
         out
