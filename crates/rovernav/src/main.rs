@@ -20,6 +20,7 @@ mod progress;
 mod render_cmd;
 mod replay;
 mod science_cmd;
+mod serve_cmd;
 mod stereo_cmd;
 
 use clap::{Parser, Subcommand};
@@ -42,6 +43,8 @@ enum Command {
     Run(RunArgs),
     /// Rebuild a run's report.json and traverse.png from its telemetry log alone.
     Replay(replay::ReplayArgs),
+    /// The operator console in the browser: run a mission (or replay a log) and serve it live.
+    Serve(serve_cmd::ServeArgs),
     /// Planner benchmarks on MovingAI maps and PGM cost maps.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -226,6 +229,7 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) if args.interactive => interactive::run(args),
         Some(Command::Run(args)) => run(args),
         Some(Command::Replay(args)) => replay::run(args),
+        Some(Command::Serve(args)) => serve_cmd::run(args),
         Some(Command::Bench(cmd)) => bench::run(cmd),
         Some(Command::Eval(EvalCommand::Terrain(args))) => eval_terrain::run(args),
         Some(Command::Eval(EvalCommand::Localization(args))) => eval_localization::run(args),

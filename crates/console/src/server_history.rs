@@ -1,0 +1,160 @@
+//! What a console client that joins late needs: the run so far.
+//!
+//! The hub keeps only the latest message of each topic; the map needs the whole driven path, the
+//! ground sensed so far and every component's state. [`History`] keeps every message of those
+//! cumulative topics and the latest of the others; [`LiveHistory`] fills one from the hub on its
+//! own thread and passes each event on to the clients under the same lock, so that a client that
+//! joins gets the history and then exactly the events after it.
+
+use crate::hub::{Channel, Event, Hub, Message};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use tokio::sync::broadcast;
+
+/// Topics of which a client needs every message (a path, the sensed ground, component states);
+/// of every other topic the latest is enough.
+pub const CUMULATIVE: [&str; 6] = [
+    "/sim/truth",
+    "/localization/estimate",
+    "/platform/sensor_frame",
+    "/sim/hazard_contacts",
+    "/bus/system/status",
+    "/bus/executive/task_status",
+];
+
+/// Bus topics shown besides the curated ones (the rest repeat them).
+const SHOWN_BUS_TOPICS: [&str; 2] = ["/bus/system/status", "/bus/executive/task_status"];
+
+/// Whether a topic goes to the console's clients.
+pub fn shown(topic: &str) -> bool {
+    !topic.starts_with("/bus/") || SHOWN_BUS_TOPICS.contains(&topic)
+}
+
+/// Channels and the messages a client needs to show the run up to now.
+#[derive(Debug, Default)]
+pub struct History {
+    /// Every topic so far.
+    pub channels: Vec<Arc<Channel>>,
+    cumulative: Vec<bool>,
+    kept: Vec<(u64, Arc<Message>)>,
+    latest: HashMap<u32, (u64, Arc<Message>)>,
+    seq: u64,
+}
+
+impl History {
+    /// Adds a topic.
+    pub fn channel(&mut self, c: Arc<Channel>) {
+        let index = c.id as usize - 1;
+        if self.cumulative.len() <= index {
+            self.cumulative.resize(index + 1, false);
+        }
+        self.cumulative[index] = CUMULATIVE.contains(&c.topic.as_str());
+        self.channels.push(c);
+    }
+
+    /// Adds a message (one of a topic not shown is dropped).
+    pub fn message(&mut self, m: Arc<Message>) {
+        let Some(channel) = self.channels.iter().find(|c| c.id == m.channel) else { return };
+        if !shown(&channel.topic) {
+            return;
+        }
+        self.seq += 1;
+        if self.cumulative.get(m.channel as usize - 1).copied().unwrap_or(false) {
+            self.kept.push((self.seq, m));
+        } else {
+            self.latest.insert(m.channel, (self.seq, m));
+        }
+    }
+
+    /// The messages kept, in the order they came.
+    pub fn messages(&self) -> Vec<Arc<Message>> {
+        let mut all: Vec<&(u64, Arc<Message>)> = self.kept.iter().chain(self.latest.values()).collect();
+        all.sort_by_key(|(seq, _)| *seq);
+        all.into_iter().map(|(_, m)| Arc::clone(m)).collect()
+    }
+}
+
+/// A history kept up to date from a hub, and the events after it.
+pub struct LiveHistory {
+    history: Mutex<History>,
+    events: broadcast::Sender<Event>,
+}
+
+impl LiveHistory {
+    /// Starts following `hub` on a thread of its own (for the life of the process).
+    pub fn follow(hub: &Arc<Hub>) -> Arc<Self> {
+        let (events, _) = broadcast::channel(crate::hub::DEFAULT_QUEUE);
+        let live = Arc::new(Self { history: Mutex::new(History::default()), events });
+        let mut snap = hub.snapshot();
+        {
+            let mut history = live.lock();
+            snap.channels.into_iter().for_each(|c| history.channel(c));
+            snap.latest.into_iter().for_each(|m| history.message(m));
+        }
+        let follower = Arc::clone(&live);
+        std::thread::Builder::new()
+            .name("console-history".into())
+            .spawn(move || {
+                loop {
+                    let event = match snap.events.blocking_recv() {
+                        Ok(event) => event,
+                        Err(broadcast::error::RecvError::Lagged(_)) => continue,
+                        Err(broadcast::error::RecvError::Closed) => break,
+                    };
+                    let mut history = follower.lock();
+                    match &event {
+                        Event::Channel(c) => history.channel(Arc::clone(c)),
+                        Event::Message(m) => history.message(Arc::clone(m)),
+                    }
+                    let _ = follower.events.send(event);
+                }
+            })
+            .expect("a thread can be spawned at start");
+        live
+    }
+
+    fn lock(&self) -> MutexGuard<'_, History> {
+        self.history.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The channels, the messages so far, and the events after them.
+    pub fn join(&self) -> (Vec<Arc<Channel>>, Vec<Arc<Message>>, broadcast::Receiver<Event>) {
+        let history = self.lock();
+        (history.channels.clone(), history.messages(), self.events.subscribe())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+    use std::time::{Duration, Instant};
+
+    #[test]
+    fn a_late_client_gets_the_whole_path_the_latest_of_the_rest_then_what_follows() {
+        let hub = Hub::new(64);
+        hub.declare("/sim/truth", "T", &json!({}));
+        hub.declare("/camera/a", "I", &json!({}));
+        hub.declare("/bus/platform/frame", "F", &json!({}));
+        let live = LiveHistory::follow(&hub);
+        for i in 0..5u64 {
+            hub.publish("/sim/truth", i, b"{}");
+            hub.publish("/camera/a", i, b"{}");
+            hub.publish("/bus/platform/frame", i, b"{}");
+        }
+        let deadline = Instant::now() + Duration::from_secs(5);
+        let (channels, messages, mut rest) = loop {
+            let joined = live.join();
+            if joined.1.len() == 6 || Instant::now() > deadline {
+                break joined;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        assert_eq!(channels.len(), 3);
+        let seen: Vec<(u32, u64)> = messages.iter().map(|m| (m.channel, m.time_ns)).collect();
+        assert_eq!(seen, [(1, 0), (1, 1), (1, 2), (1, 3), (1, 4), (2, 4)], "bus frames are not shown");
+        hub.publish("/sim/truth", 9, b"{}");
+        let next = rest.blocking_recv().unwrap();
+        assert!(matches!(next, Event::Message(m) if m.time_ns == 9));
+    }
+}
