@@ -31,6 +31,7 @@ use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
 use rovernav_core::{Point2, Pose3};
 use rovernav_sim::Simulator;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// The rover process's platform requests (what crosses the network, not the rover's local bus).
@@ -39,7 +40,7 @@ pub const PLATFORM_REQUEST: Topic<PlatformRequest> = Topic::new("/platform/reque
 pub const PLATFORM_REPLY: Topic<PlatformReply> = Topic::new("/platform/reply");
 
 /// What the runtime asked of the platform.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PlatformCall {
     /// Initialization; names the mission and seed so that mismatched processes are refused.
@@ -63,7 +64,7 @@ pub enum PlatformCall {
 }
 
 /// One call of the platform with the inputs queued for it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PlatformRequest {
     /// Request number (1 for the first); the reply repeats it.
     pub seq: u64,
@@ -78,7 +79,7 @@ pub struct PlatformRequest {
 }
 
 /// A message the platform published during a call.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PlatformOutput {
     /// On `/platform/frame`.
@@ -88,7 +89,7 @@ pub enum PlatformOutput {
 }
 
 /// The answer to one [`PlatformRequest`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PlatformReply {
     /// The request's number.
     pub seq: u64,
@@ -103,7 +104,7 @@ pub struct PlatformReply {
 }
 
 /// The figures of a run that need simulator truth, computed by the simulator process.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Scoring {
     /// True final position to the final goal (m).
     pub goal_error_m: f64,

@@ -119,6 +119,9 @@ pub struct CycleRecord<'a> {
     pub plan: &'a [Point2],
     /// Hazard contacts so far.
     pub hazard_contacts: u32,
+    /// The navigator's drawings after the command (world frame); empty unless the observer
+    /// asks for them ([`RunObserver::wants_overlays`]).
+    pub overlays: &'a [Overlay],
 }
 
 /// Watches a run from outside the loop (telemetry logs, live displays); never steers it.
@@ -139,6 +142,11 @@ pub trait RunObserver {
     /// Whether to receive every bus message as JSON ([`RunObserver::on_bus`]); serializing
     /// every message costs time, so only observers that record the bus ask for it.
     fn wants_bus(&self) -> bool {
+        false
+    }
+    /// Whether [`CycleRecord::overlays`] should hold the navigator's drawings every cycle;
+    /// drawing them costs time, so only observers that show them ask.
+    fn wants_overlays(&self) -> bool {
         false
     }
     /// Every message published on the bus since the last call, in publish order, stamped with

@@ -140,6 +140,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
             trace.plans.push(plan.clone());
         }
         let estimate = estimator(&runtime).estimate();
+        let overlays = if observer.wants_overlays() { navigator_of(&runtime).overlays() } else { Vec::new() };
         let goal = deliberative.goal().unwrap_or(world.goal.position);
         let progress = |cycles: u64, t: f64, distance_to_goal_m: f64| Progress {
             cycles,
@@ -162,6 +163,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
                         truth: &e.truth,
                         plan: &plan,
                         hazard_contacts: e.hazard_contacts,
+                        overlays: &overlays,
                     });
                     on_progress(&progress(cycles, e.frame.t, Point2::new(e.truth.x, e.truth.y).dist(goal)));
                 }

@@ -2,8 +2,10 @@
 //! Foxglove), and the reader that rebuilds the run from the log alone.
 //!
 //! - [`TelemetryWriter`]: a generic MCAP writer (JSON messages with JSON Schemas derived from
-//!   the message types, lz4 chunks,
+//!   the message types, zstd chunks,
 //!   a flush policy so a killed process loses at most about a second).
+//! - [`foxglove`]: Foxglove's well-known schemas (frames, grids, scenes, log, images) so that
+//!   Foxglove shows a run natively.
 //! - [`TelemetryRecorder`]: a `RunObserver` that logs the world, settings, sensor frames,
 //!   commands, plans, estimates, truth, hazard contacts, overlays and the report
 //!   ([`messages::topics`]).
@@ -16,6 +18,7 @@
 #![warn(missing_docs)]
 
 pub mod base64;
+pub mod foxglove;
 pub mod messages;
 pub mod reader;
 pub mod recorder;

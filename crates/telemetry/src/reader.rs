@@ -5,13 +5,14 @@
 
 use crate::messages::{
     CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, SensorFrameMsg, SettingsMsg,
-    TruthMsg, WorldMsg, topics,
+    TruthMsg, WorldMsg, topics, without_images,
 };
 use crate::writer::TelemetryError;
-use rovernav_core::{Grid2, GridGeometry, Point2, Pose3};
+use rovernav_core::{Grid2, GridGeometry, Point2, Pose3, SensorFrame};
 use rovernav_executive::{HazardEvent, Report, StageTimes, Trace, World};
+use serde::Deserialize;
 use serde::de::DeserializeOwned;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// How far a log could be read.
@@ -34,8 +35,9 @@ pub struct LoggedRun {
     pub world: Option<WorldMsg>,
     /// `/executive/settings`.
     pub settings: Option<SettingsMsg>,
-    /// `/platform/sensor_frame`.
-    pub frames: Vec<SensorFrameMsg>,
+    /// `/platform/sensor_frame`, each frame resolved (from `/bus/platform/frame` when the
+    /// cycle's message points there).
+    pub frames: Vec<LoggedFrame>,
     /// `/navigation/command`.
     pub commands: Vec<CommandMsg>,
     /// `/localization/estimate`.
@@ -60,6 +62,22 @@ pub struct LoggedRun {
     pub end: LogEnd,
 }
 
+/// One cycle's sensor frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoggedFrame {
+    /// Cycle (0: the frame before the first command).
+    pub cycle: u64,
+    /// The frame (without camera images).
+    pub frame: SensorFrame,
+}
+
+/// The part of a `/bus/platform/frame` message the reader keeps.
+#[derive(Deserialize)]
+struct BusFrame {
+    seq: u64,
+    frame: SensorFrame,
+}
+
 /// Reads a log; a truncated file is not an error (see [`LogEnd::truncated`]), a message that
 /// does not decode is.
 pub fn read_log(path: &Path) -> Result<LoggedRun, TelemetryError> {
@@ -76,6 +94,8 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
         return Err(content(format!("not an MCAP log ({what})")));
     }
     let mut run = LoggedRun { path: path.to_path_buf(), ..Default::default() };
+    // Bus frames by number, until a cycle's message claims them.
+    let mut bus_frames: HashMap<u64, SensorFrame> = HashMap::new();
     for item in bounded_messages(bytes) {
         let msg = match item {
             Ok(m) => m,
@@ -93,7 +113,21 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
         match topic {
             topics::WORLD => run.world = Some(decode(data).map_err(decode_err)?),
             topics::SETTINGS => run.settings = Some(decode(data).map_err(decode_err)?),
-            topics::SENSOR_FRAME => run.frames.push(decode(data).map_err(decode_err)?),
+            topics::SENSOR_FRAME => {
+                let m: SensorFrameMsg = decode(data).map_err(decode_err)?;
+                let frame = match (m.frame, m.bus_seq) {
+                    (Some(frame), _) => frame,
+                    (None, Some(seq)) => bus_frames.remove(&seq).ok_or_else(|| {
+                        decode_err(format!("field `bus_seq`: no `{BUS_FRAME}` message {seq} before it"))
+                    })?,
+                    (None, None) => return Err(decode_err("neither `frame` nor `bus_seq`".into())),
+                };
+                run.frames.push(LoggedFrame { cycle: m.cycle, frame: without_images(&frame) });
+            }
+            BUS_FRAME => {
+                let m: BusFrame = decode(data).map_err(decode_err)?;
+                bus_frames.insert(m.seq, m.frame);
+            }
             topics::COMMAND => run.commands.push(decode(data).map_err(decode_err)?),
             topics::ESTIMATE => run.estimates.push(decode(data).map_err(decode_err)?),
             topics::TRUTH => run.truths.push(decode(data).map_err(decode_err)?),
@@ -108,6 +142,9 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
     }
     Ok(run)
 }
+
+/// Where the recorder logs the platform's frames as the bus carried them.
+const BUS_FRAME: &str = "/bus/platform/frame";
 
 /// The log's messages in file order, each record at most 64 times the log's length (64 MiB at
 /// least: a chunk decompresses to more than it takes) and within the memory ceiling

@@ -1,15 +1,21 @@
 //! The run observer that logs every topic of a run to MCAP.
 
+use crate::foxglove::publisher::Out;
+use crate::foxglove::topics as fox;
+use crate::foxglove::{CompressedImageMsg, FoxglovePublisher, LogMsg, foxglove_topic_table, level};
 use crate::messages::{
-    CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, RawImageMsg, SensorFrameMsg,
-    SettingsMsg, TruthMsg, WorldMsg, camera_topic, topic_table, topics,
+    CommandMsg, CycleMsg, EstimateMsg, HazardContactMsg, OverlaysMsg, PlanMsg, SensorFrameMsg, SettingsMsg,
+    TruthMsg, WorldMsg, camera_topic, topic_table, topics, without_images,
 };
 use crate::writer::{FlushPolicy, LogStats, TelemetryError, TelemetryWriter};
 use rovernav_bus::Record;
+use rovernav_bus::schema::titled_schema_of;
 use rovernav_core::{Point2, Pose3, PoseEstimate, SensorFrame};
+use rovernav_executive::messages::FrameSource;
+use rovernav_executive::messages::topics::PLATFORM_FRAME;
 use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
 use serde::Serialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
@@ -61,6 +67,13 @@ pub struct TelemetryRecorder<W: Write + Seek + Send + 'static = BufWriter<File>>
     last_hazards: u32,
     /// The derived schema of each bus topic of the stack.
     bus_schemas: BTreeMap<&'static str, serde_json::Value>,
+    /// The start (cycle 0) until its frame is logged: on the bus, or here at the latest before
+    /// the first cycle.
+    pending_start: Option<(u64, f64, SensorFrame)>,
+    /// `(seq, t)` of the bus's command frames not yet tied to a cycle, oldest first.
+    bus_frames: VecDeque<(u64, f64)>,
+    /// The Foxglove topics' state, from the start of the run.
+    foxglove: Option<FoxglovePublisher>,
 }
 
 impl TelemetryRecorder<BufWriter<File>> {
@@ -81,7 +94,7 @@ impl TelemetryRecorder<BufWriter<File>> {
 impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
     /// Declares every topic on a writer and starts its flush timer.
     pub fn new(mut writer: TelemetryWriter<W>) -> Result<Self, TelemetryError> {
-        for (topic, name, schema, truth) in topic_table() {
+        for (topic, name, schema, truth) in topic_table().into_iter().chain(foxglove_topic_table()) {
             let mut metadata = BTreeMap::new();
             if truth {
                 metadata.insert("simulation_truth".to_string(), "true".to_string());
@@ -109,7 +122,10 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
             last_plan: None,
             plans_logged: 0,
             last_hazards: 0,
-            bus_schemas: rovernav_executive::messages::topics::all().into_iter().collect(),
+            bus_schemas: bus_schemas(),
+            pending_start: None,
+            bus_frames: VecDeque::new(),
+            foxglove: None,
         })
     }
 
@@ -125,17 +141,34 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
         lock(&self.shared).apply(|w| w.write(topic, time_ns, msg));
     }
 
-    /// Logs a frame's camera images, each on its camera's topic (declared on first use).
+    /// Logs a frame's camera images as PNG, each on its camera's topic (declared on first use).
     fn put_images(&self, time_ns: u64, frame: &SensorFrame) {
         for image in &frame.images {
             let topic = camera_topic(&image.camera);
-            let msg = RawImageMsg::of(image);
+            let msg = match CompressedImageMsg::of(image) {
+                Ok(msg) => msg,
+                Err(why) => {
+                    let line =
+                        LogMsg::new(image.t, level::WARNING, "telemetry", format!("image not logged: {why}"));
+                    self.put(fox::LOG, time_ns, &line);
+                    continue;
+                }
+            };
             lock(&self.shared).apply(|w| {
                 if !w.has_topic(&topic) {
-                    w.add_topic(&topic, "foxglove.RawImage", &RawImageMsg::schema(), &BTreeMap::new())?;
+                    let schema = titled_schema_of::<CompressedImageMsg>(fox::COMPRESSED_IMAGE);
+                    w.add_topic(&topic, fox::COMPRESSED_IMAGE, &schema, &BTreeMap::new())?;
                 }
                 w.write(&topic, time_ns, &msg)
             });
+        }
+    }
+
+    /// Writes the Foxglove publisher's messages at `time_ns`.
+    fn put_all(&self, time_ns: u64, outs: Vec<Out>) {
+        let mut shared = lock(&self.shared);
+        for o in outs {
+            shared.apply(|w| w.write_json(o.topic, time_ns, &o.json));
         }
     }
 
@@ -154,6 +187,18 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
         self.plans_logged += 1;
     }
 
+    /// Logs cycle 0's frame (on the bus as message `bus_seq`, or here) and its end, once.
+    fn log_start(&mut self, bus_seq: Option<u64>) {
+        if let Some((t, sim_time_s, frame)) = self.pending_start.take() {
+            let msg = match bus_seq {
+                Some(seq) => SensorFrameMsg::on_bus(0, seq),
+                None => SensorFrameMsg { cycle: 0, bus_seq: None, frame: Some(frame) },
+            };
+            self.put(topics::SENSOR_FRAME, t, &msg);
+            self.end_cycle(0, sim_time_s, t);
+        }
+    }
+
     /// Stops the flush timer.
     fn stop_timer(&mut self) {
         if let Some((stop, handle)) = self.flusher.take() {
@@ -165,6 +210,7 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
 
     /// Closes the last chunk and writes the summary; returns the first error of the run.
     pub fn finish(mut self) -> Result<LogStats, TelemetryError> {
+        self.log_start(None);
         self.stop_timer();
         let mut shared = lock(&self.shared);
         let finished = match shared.writer.take() {
@@ -180,12 +226,37 @@ impl<W: Write + Seek + Send + 'static> TelemetryRecorder<W> {
 
 impl<W: Write + Seek + Send + 'static> Drop for TelemetryRecorder<W> {
     fn drop(&mut self) {
+        self.log_start(None);
         self.stop_timer();
         // Without `finish` (a panic unwinding through the run): close the file properly anyway.
         if let Some(w) = lock(&self.shared).writer.take() {
             let _ = w.finish();
         }
     }
+}
+
+/// The derived schema of every bus topic of the stack: the components' and the remote
+/// platform link's (a rover process logs its link to the simulator).
+fn bus_schemas() -> BTreeMap<&'static str, serde_json::Value> {
+    use rovernav_executive::remote::{PLATFORM_REPLY, PLATFORM_REQUEST};
+    let mut all: BTreeMap<_, _> = rovernav_executive::messages::topics::all().into_iter().collect();
+    all.insert(PLATFORM_REQUEST.name(), PLATFORM_REQUEST.schema());
+    all.insert(PLATFORM_REPLY.name(), PLATFORM_REPLY.schema());
+    all
+}
+
+/// The part of a `/platform/frame` bus message that ties it to a cycle.
+#[derive(serde::Deserialize)]
+struct FrameHead {
+    seq: u64,
+    source: FrameSource,
+    frame: FrameTime,
+}
+
+/// A frame's time (the rest of the frame is skipped).
+#[derive(serde::Deserialize)]
+struct FrameTime {
+    t: f64,
 }
 
 /// The true pose the simulator starts from: the rover settled on the terrain at the start
@@ -205,7 +276,6 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
         let t = self.stamp(frame.t);
         self.put(topics::WORLD, t, &WorldMsg::of(world));
         self.put(topics::SETTINGS, t, &SettingsMsg::of(settings));
-        self.put(topics::SENSOR_FRAME, t, &SensorFrameMsg::of(0, frame));
         self.put(topics::ESTIMATE, t, &EstimateMsg::of(0, frame.t, estimate));
         let truth = TruthMsg {
             simulation_truth: true,
@@ -215,15 +285,30 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             hazard_contacts: 0,
         };
         self.put(topics::TRUTH, t, &truth);
-        self.end_cycle(0, frame.t, t);
+        let (foxglove, outs) = FoxglovePublisher::start(world, settings, frame.t, estimate, &truth.pose);
+        self.foxglove = Some(foxglove);
+        self.put_all(t, outs);
+        // The frame and the end of cycle 0 follow with the bus's initial frame (`on_bus`).
+        self.pending_start = Some((t, frame.t, without_images(frame)));
         // The world is the largest message and everything replay needs: get it to disk now.
         lock(&self.shared).apply(|w| w.flush());
     }
 
     fn on_cycle(&mut self, r: &CycleRecord<'_>) {
+        self.log_start(None);
         let t = self.stamp(r.sim_time_s);
         self.put(topics::COMMAND, t, &CommandMsg::of(r.cycle, r.sim_time_s, r.command));
-        self.put(topics::SENSOR_FRAME, t, &SensorFrameMsg::of(r.cycle, r.frame));
+        // The bus's next command frame is this cycle's when their times agree bit for bit.
+        let frame_msg = match self.bus_frames.pop_front() {
+            Some((seq, bus_t)) if bus_t.to_bits() == r.frame.t.to_bits() => {
+                SensorFrameMsg::on_bus(r.cycle, seq)
+            }
+            _ => {
+                self.bus_frames.clear();
+                SensorFrameMsg::of(r.cycle, r.frame)
+            }
+        };
+        self.put(topics::SENSOR_FRAME, t, &frame_msg);
         self.put_images(t, r.frame);
         self.put(topics::ESTIMATE, t, &EstimateMsg::of(r.cycle, r.sim_time_s, r.estimate));
         let truth = TruthMsg {
@@ -249,11 +334,19 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             };
             self.put(topics::HAZARD_CONTACTS, t, &contact);
         }
+        if let Some(foxglove) = self.foxglove.as_mut() {
+            let outs = foxglove.cycle(r);
+            self.put_all(t, outs);
+        }
         self.end_cycle(r.cycle, r.sim_time_s, t);
         lock(&self.shared).apply(|w| w.maybe_flush().map(|_| ()));
     }
 
     fn wants_bus(&self) -> bool {
+        true
+    }
+
+    fn wants_overlays(&self) -> bool {
         true
     }
 
@@ -265,21 +358,38 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             lock(&self.shared).apply(|w| {
                 if !w.has_topic(&topic) {
                     // The stack's topics carry the message types' derived schemas; a topic
-                    // outside that table (a test's, a remote link's) is plain JSON.
+                    // outside that table (a test's) is any JSON, said so in a schema that is
+                    // still a schema (titled and described), never an empty one.
                     let metadata = BTreeMap::from([("bus_topic".to_string(), record.topic.clone())]);
                     let name = if record.type_name.is_empty() { "json" } else { &record.type_name };
-                    let schema = bus_schemas
-                        .get(record.topic.as_str())
-                        .cloned()
-                        .unwrap_or_else(|| serde_json::json!({}));
+                    let schema = bus_schemas.get(record.topic.as_str()).cloned().unwrap_or_else(|| {
+                        serde_json::json!({
+                            "$schema": "https://json-schema.org/draft/2020-12/schema",
+                            "title": name,
+                            "description": format!("`{}` as published on the bus: a message type outside the stack's topic table, any JSON", record.topic),
+                        })
+                    });
                     w.add_topic(&topic, name, &schema, &metadata)?;
                 }
                 w.write_json(&topic, t, &record.payload)
             });
+            if let Some(line) = self.foxglove.as_mut().and_then(|f| f.bus(record)) {
+                self.put_all(t, vec![line]);
+            }
+            if record.topic == PLATFORM_FRAME.name()
+                && let Ok(head) = serde_json::from_slice::<FrameHead>(&record.payload)
+            {
+                match head.source {
+                    FrameSource::Initial => self.log_start(Some(head.seq)),
+                    FrameSource::Command(_) => self.bus_frames.push_back((head.seq, head.frame.t)),
+                    FrameSource::Hold => {}
+                }
+            }
         }
     }
 
     fn on_finish(&mut self, report: &Report, trace: &Trace) {
+        self.log_start(None);
         let t = self.stamp(report.sim_time_s);
         // The plan of the finishing step is announced without a cycle of its own.
         let unlogged: Vec<Vec<Point2>> = trace.plans.iter().skip(self.plans_logged).cloned().collect();
@@ -291,6 +401,10 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             t,
             &OverlaysMsg { sim_time_s: report.sim_time_s, overlays: trace.overlays.clone() },
         );
+        if let Some(foxglove) = self.foxglove.as_mut() {
+            let outs = foxglove.finish(report, trace);
+            self.put_all(t, outs);
+        }
         self.put(topics::REPORT, t, report);
         lock(&self.shared).apply(|w| w.flush());
     }

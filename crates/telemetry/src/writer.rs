@@ -1,5 +1,5 @@
 //! A generic MCAP writer: one channel per topic, JSON messages with JSON Schemas (what Foxglove
-//! and the MCAP tools read), lz4-compressed chunks, and a flush policy that bounds what a killed
+//! and the MCAP tools read), zstd-compressed chunks, and a flush policy that bounds what a killed
 //! process loses.
 //!
 //! MCAP keeps messages in chunks that a reader can only use once they are complete, so a crash
@@ -119,6 +119,10 @@ pub struct TelemetryWriter<W: Write + Seek = BufWriter<File>> {
     stats: LogStats,
 }
 
+/// The zstd level of the chunks: the default mission's log is 4.20 MB at the default level 3,
+/// 4.07 MB at 9, for no measurable difference in the run's wall time (2.4 s).
+const ZSTD_LEVEL: u32 = 9;
+
 /// The MCAP profile: none of the well-known ones (ROS 1/2) fits JSON messages.
 const PROFILE: &str = "";
 
@@ -138,7 +142,8 @@ impl<W: Write + Seek> TelemetryWriter<W> {
     /// Starts a log on any seekable stream; `path` names it in errors.
     pub fn new(stream: W, path: &Path, policy: FlushPolicy) -> Result<Self, TelemetryError> {
         let options = WriteOptions::new()
-            .compression(Some(Compression::Lz4))
+            .compression(Some(Compression::Zstd))
+            .compression_level(ZSTD_LEVEL)
             .profile(PROFILE)
             .library(concat!("rovernav-telemetry ", env!("CARGO_PKG_VERSION")))
             // Chunks are closed by the flush policy only, at consistent points.

@@ -1,5 +1,5 @@
-//! Fuzz target of the MCAP reader (issue 44): a small run's log (lz4, as `rovernav run` writes
-//! it, and re-encoded with zstd), mutated byte by byte, cut anywhere, or with a record length,
+//! Fuzz target of the MCAP reader (issue 44): a small run's log (zstd, as `rovernav run` writes
+//! it, and re-encoded with lz4), mutated byte by byte, cut anywhere, or with a record length,
 //! chunk size or grid size overwritten with a huge value, is read and replayed without a panic
 //! or an abort. `PROPTEST_CASES` sets the cases.
 
@@ -9,12 +9,12 @@ use proptest::prelude::*;
 use rovernav_telemetry::parse_log;
 use std::sync::OnceLock;
 
-/// The seed logs: one lz4 log of a short traverse and its zstd re-encoding.
+/// The seed logs: one zstd log of a short traverse and its lz4 re-encoding.
 fn seeds() -> &'static [Vec<u8>; 2] {
     static SEEDS: OnceLock<[Vec<u8>; 2]> = OnceLock::new();
     SEEDS.get_or_init(|| {
-        let (lz4, zstd) = common::lz4_and_zstd_logs("fuzz", 40, 16 * 1024);
-        [lz4, zstd]
+        let (zstd, lz4) = common::zstd_and_lz4_logs("fuzz", 40, 16 * 1024);
+        [zstd, lz4]
     })
 }
 

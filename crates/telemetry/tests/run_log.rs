@@ -268,6 +268,7 @@ fn the_flush_timer_gets_a_quiet_cycle_to_disk_without_another_call() {
         truth: &rovernav_core::Pose3::default(),
         plan: &[],
         hazard_contacts: 0,
+        overlays: &[],
     });
     let waited = std::time::Instant::now();
     loop {

@@ -158,31 +158,47 @@ impl SettingsMsg {
     }
 }
 
-/// `/platform/sensor_frame`: what the platform reported after a command (its camera images go
-/// to their own `/camera/NAME` topics, not here).
+/// `/platform/sensor_frame`: what the platform reported after a command, by cycle.
+///
+/// A frame is logged once: when the log holds the component bus, the frame is the
+/// `/bus/platform/frame` message numbered `bus_seq` (logged just before) and this message only
+/// ties it to its cycle; otherwise (a recorder not fed the bus) the frame is here, without its
+/// images (they go to their own `/camera/NAME` topics).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SensorFrameMsg {
     /// Cycle (0: the frame before the first command).
     pub cycle: u64,
-    /// The frame, without its images (its fields beside `cycle`).
-    #[serde(flatten)]
-    pub frame: SensorFrame,
+    /// `seq` of the `/bus/platform/frame` message that holds the frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bus_seq: Option<u64>,
+    /// The frame itself, when the bus is not logged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<SensorFrame>,
 }
 
 impl SensorFrameMsg {
-    /// The message of a frame.
+    /// The message of a frame logged here, without its images.
     pub fn of(cycle: u64, f: &SensorFrame) -> Self {
-        let frame = SensorFrame {
-            t: f.t,
-            clouds: f.clouds.clone(),
-            imu: f.imu.clone(),
-            odometry: f.odometry.clone(),
-            proximity: f.proximity,
-            motion_stopped: f.motion_stopped.clone(),
-            images: Vec::new(),
-            power: f.power,
-        };
-        Self { cycle, frame }
+        Self { cycle, bus_seq: None, frame: Some(without_images(f)) }
+    }
+
+    /// The message of a frame logged on the bus as message `bus_seq`.
+    pub fn on_bus(cycle: u64, bus_seq: u64) -> Self {
+        Self { cycle, bus_seq: Some(bus_seq), frame: None }
+    }
+}
+
+/// A frame without its camera images.
+pub fn without_images(f: &SensorFrame) -> SensorFrame {
+    SensorFrame {
+        t: f.t,
+        clouds: f.clouds.clone(),
+        imu: f.imu.clone(),
+        odometry: f.odometry.clone(),
+        proximity: f.proximity,
+        motion_stopped: f.motion_stopped.clone(),
+        images: Vec::new(),
+        power: f.power,
     }
 }
 
@@ -352,7 +368,7 @@ pub(crate) mod tests {
     #[test]
     fn sensor_frame_round_trips_and_fits_its_schema() {
         let frame = sample_frame();
-        let back = through_json(&SensorFrameMsg::of(4, &frame)).frame;
+        let back = through_json(&SensorFrameMsg::of(4, &frame)).frame.unwrap();
         assert!(back.imu[1].compass_yaw.is_nan(), "a faulty compass stays faulty");
         let mut expected = frame.clone();
         expected.imu[1].compass_yaw = 0.0;

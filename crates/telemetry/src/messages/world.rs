@@ -2,7 +2,7 @@
 //!
 //! The rover, the sensor models, the rocks, the start and the goal are the simulator's and the
 //! core's own types (they derive their serde and schema); only the height grid has a form of its
-//! own here, base64 of little-endian f32 (exact, NaN for no data included).
+//! own here, byte planes of little-endian f32 in base64 (exact, NaN for no data included).
 
 use crate::base64;
 use rovernav_core::{Goal, GridGeometry, Pose2, RoverConfig};
@@ -17,9 +17,10 @@ use serde::{Deserialize, Serialize};
 pub struct TerrainMsg {
     /// Grid placement (row 0 south, column 0 west).
     pub grid: GridGeometry,
-    /// Heights (m) as little-endian f32, row-major from the south-west corner, NaN for no data.
+    /// Heights (m) as f32, row-major from the south-west corner, NaN for no data: their
+    /// little-endian bytes in four planes (every first byte, then every second...), base64.
     #[schemars(extend("contentEncoding" = "base64"))]
-    pub heights_f32le: String,
+    pub heights_f32_planes: String,
     /// The source file's nodata value, if any.
     pub nodata: Option<f32>,
     /// Georeference of the local frame.
@@ -53,7 +54,7 @@ impl WorldMsg {
             simulation_truth: true,
             terrain: TerrainMsg {
                 grid: *dem.geometry(),
-                heights_f32le: base64::encode_f32s(dem.heights.data.iter().copied()),
+                heights_f32_planes: base64::encode_f32_planes(&dem.heights.data),
                 nodata: dem.nodata,
                 geo: dem.geo.clone(),
                 rocks: world.terrain.rocks.clone(),
@@ -77,11 +78,11 @@ impl WorldMsg {
         if !(geometry.origin_x.is_finite() && geometry.origin_y.is_finite()) {
             return Err("field `terrain.grid`: origin is not finite".into());
         }
-        let heights = base64::decode_f32s(&t.heights_f32le)
-            .map_err(|e| format!("field `terrain.heights_f32le`: {e}"))?;
+        let heights = base64::decode_f32_planes(&t.heights_f32_planes)
+            .map_err(|e| format!("field `terrain.heights_f32_planes`: {e}"))?;
         if heights.len() != cells || cells == 0 {
             return Err(format!(
-                "field `terrain.heights_f32le`: {} heights for a {} x {} grid",
+                "field `terrain.heights_f32_planes`: {} heights for a {} x {} grid",
                 heights.len(),
                 geometry.cols,
                 geometry.rows
@@ -168,7 +169,7 @@ mod tests {
         let mut msg = WorldMsg::of(&small_world());
         msg.terrain.grid.cols += 1;
         let err = msg.to_world().unwrap_err();
-        assert!(err.contains("terrain.heights_f32le"), "{err}");
+        assert!(err.contains("terrain.heights_f32_planes"), "{err}");
         let mut value = serde_json::to_value(WorldMsg::of(&small_world())).unwrap();
         value["sensor_model"]["proximity"]["bearings"].as_array_mut().unwrap().pop();
         let err = serde_json::from_value::<WorldMsg>(value).unwrap_err().to_string();

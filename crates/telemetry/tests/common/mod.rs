@@ -1,5 +1,5 @@
-//! Logs shared by the telemetry tests: a short traverse logged as `rovernav run` logs it (lz4),
-//! and the same messages re-encoded with zstd (what other MCAP writers produce by default).
+//! Logs shared by the telemetry tests: a short traverse logged as `rovernav run` logs it (zstd),
+//! and the same messages re-encoded with lz4 (what earlier rovernav logs and other writers use).
 
 use rovernav_executive::{Run, RunSettings, long_yard_world};
 use rovernav_telemetry::{FlushPolicy, TelemetryRecorder, TelemetryWriter, mcap};
@@ -7,8 +7,8 @@ use std::io::Cursor;
 use std::time::Duration;
 
 /// The bytes of the small yard's log (`max_cycles` at most, chunks closed at `chunk_bytes`) and
-/// of its zstd re-encoding; `name` keeps concurrent tests' files apart.
-pub fn lz4_and_zstd_logs(name: &str, max_cycles: u64, chunk_bytes: u64) -> (Vec<u8>, Vec<u8>) {
+/// of its lz4 re-encoding; `name` keeps concurrent tests' files apart.
+pub fn zstd_and_lz4_logs(name: &str, max_cycles: u64, chunk_bytes: u64) -> (Vec<u8>, Vec<u8>) {
     let path = std::env::temp_dir().join(format!("rovernav-telemetry-{name}-{}.mcap", std::process::id()));
     let policy = FlushPolicy { max_interval: Duration::from_secs(3600), max_chunk_bytes: chunk_bytes };
     let mut recorder = TelemetryRecorder::new(TelemetryWriter::create(&path, policy).unwrap()).unwrap();
@@ -23,16 +23,16 @@ pub fn lz4_and_zstd_logs(name: &str, max_cycles: u64, chunk_bytes: u64) -> (Vec<
     };
     Run::new(long_yard_world(3, 5.0, 4.0, 1.0), settings).observer(&mut recorder).execute().unwrap();
     recorder.finish().unwrap();
-    let lz4 = std::fs::read(&path).unwrap();
+    let zstd = std::fs::read(&path).unwrap();
     let _ = std::fs::remove_file(&path);
-    // Every message re-written, in order, into zstd chunks.
-    let mut zstd = Cursor::new(Vec::new());
+    // Every message re-written, in order, into lz4 chunks.
+    let mut lz4 = Cursor::new(Vec::new());
     let mut writer =
-        mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).create(&mut zstd).unwrap();
-    for message in mcap::MessageStream::new(&lz4).unwrap() {
+        mcap::WriteOptions::new().compression(Some(mcap::Compression::Lz4)).create(&mut lz4).unwrap();
+    for message in mcap::MessageStream::new(&zstd).unwrap() {
         writer.write(&message.unwrap()).unwrap();
     }
     writer.finish().unwrap();
     drop(writer);
-    (lz4, zstd.into_inner())
+    (zstd, lz4.into_inner())
 }
