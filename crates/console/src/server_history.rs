@@ -13,17 +13,21 @@ use tokio::sync::broadcast;
 
 /// Topics of which a client needs every message (a path, the sensed ground, component states);
 /// of every other topic the latest is enough.
-pub const CUMULATIVE: [&str; 6] = [
+pub const CUMULATIVE: [&str; 8] = [
     "/sim/truth",
     "/localization/estimate",
     "/platform/sensor_frame",
+    "/bus/platform/frame",
+    "/log",
     "/sim/hazard_contacts",
     "/bus/system/status",
     "/bus/executive/task_status",
 ];
 
-/// Bus topics shown besides the curated ones (the rest repeat them).
-const SHOWN_BUS_TOPICS: [&str; 2] = ["/bus/system/status", "/bus/executive/task_status"];
+/// Bus topics shown besides the curated ones (the rest repeat them); `/platform/sensor_frame`
+/// may name its frame by its number on `/bus/platform/frame`.
+const SHOWN_BUS_TOPICS: [&str; 3] =
+    ["/bus/system/status", "/bus/executive/task_status", "/bus/platform/frame"];
 
 /// Whether a topic goes to the console's clients.
 pub fn shown(topic: &str) -> bool {
@@ -135,12 +139,12 @@ mod tests {
         let hub = Hub::new(64);
         hub.declare("/sim/truth", "T", &json!({}));
         hub.declare("/camera/a", "I", &json!({}));
-        hub.declare("/bus/platform/frame", "F", &json!({}));
+        hub.declare("/bus/navigation/plan", "F", &json!({}));
         let live = LiveHistory::follow(&hub);
         for i in 0..5u64 {
             hub.publish("/sim/truth", i, b"{}");
             hub.publish("/camera/a", i, b"{}");
-            hub.publish("/bus/platform/frame", i, b"{}");
+            hub.publish("/bus/navigation/plan", i, b"{}");
         }
         let deadline = Instant::now() + Duration::from_secs(5);
         let (channels, messages, mut rest) = loop {
@@ -152,7 +156,7 @@ mod tests {
         };
         assert_eq!(channels.len(), 3);
         let seen: Vec<(u32, u64)> = messages.iter().map(|m| (m.channel, m.time_ns)).collect();
-        assert_eq!(seen, [(1, 0), (1, 1), (1, 2), (1, 3), (1, 4), (2, 4)], "bus frames are not shown");
+        assert_eq!(seen, [(1, 0), (1, 1), (1, 2), (1, 3), (1, 4), (2, 4)], "the bus plan is not shown");
         hub.publish("/sim/truth", 9, b"{}");
         let next = rest.blocking_recv().unwrap();
         assert!(matches!(next, Event::Message(m) if m.time_ns == 9));

@@ -116,9 +116,22 @@ impl Peer {
         }
     }
 
-    async fn close(mut self, code: u16, why: &'static str) {
+    /// Sends a close frame, then reads (and drops) what the client still sends until it closes
+    /// too or a second has passed: closing a socket with unread data would reset the connection
+    /// and could lose the close frame that says why.
+    async fn close(&mut self, code: u16, why: &'static str) {
         let frame = CloseFrame { code, reason: why.into() };
-        let _ = self.socket.send(WsMessage::Close(Some(frame))).await;
+        if self.socket.send(WsMessage::Close(Some(frame))).await.is_err() {
+            return;
+        }
+        let drain = async {
+            while let Some(Ok(msg)) = self.socket.recv().await {
+                if matches!(msg, WsMessage::Close(_)) {
+                    break;
+                }
+            }
+        };
+        let _ = tokio::time::timeout(Duration::from_secs(1), drain).await;
     }
 }
 
@@ -341,6 +354,6 @@ mod tests {
         let m = Message { channel: 3, time_ns: 7, json: Arc::from(&b"{\"x\":1.5}"[..]) };
         let v: serde_json::Value = serde_json::from_str(&message_json(&m)).unwrap();
         assert_eq!(v, json!({"type": "msg", "ch": 3, "t": 7, "data": {"x": 1.5}}));
-        assert!(shown("/sim/truth") && shown("/bus/system/status") && !shown("/bus/platform/frame"));
+        assert!(shown("/sim/truth") && shown("/bus/system/status") && !shown("/bus/navigation/plan"));
     }
 }

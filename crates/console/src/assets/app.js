@@ -10,8 +10,9 @@ const log = new Log(el("log"), el("logfilter"));
 const state = {
   connected: false, client: null, holder: null, phase: "-", outcome: null, replay: null,
   channels: {}, world: false, rover: null, cycles: 0, simTime: null, messages: 0, lagged: 0,
-  components: {}, power: null, cameras: {}, closed: null,
+  components: {}, power: null, cameras: {}, closed: null, frames: 0,
 };
+const busFrames = new Map();
 const draft = { waypoints: [], goal: null, keep_out: [], zone: [] };
 let ws = null, dirty = true;
 
@@ -46,22 +47,16 @@ function onTelemetry(topic, t, data) {
   } else if (topic === "/localization/estimate") {
     map.estimates.push({ x: data.pose.x, y: data.pose.y });
     state.estimate = data.pose;
+  } else if (topic === "/bus/platform/frame") {
+    // Frames logged on the bus; `/platform/sensor_frame` then ties one to its cycle by number.
+    busFrames.set(data.seq, data.frame || data);
+    if (busFrames.size > 64) busFrames.delete(busFrames.keys().next().value);
   } else if (topic === "/platform/sensor_frame") {
-    if (data.clouds && data.clouds.length) {
-      // Placed with the truth of the same cycle, which follows in the log.
-      if (data.cycle === 0 && map.truth.length === 0 && map.world) map.addClouds(data.clouds, map.world.start);
-      else state.pending = { cycle: data.cycle, clouds: data.clouds };
-    }
-    map.proximity = data.proximity;
-    const imu = data.imu && data.imu.length ? data.imu[data.imu.length - 1] : null;
-    if (imu) {
-      const compass = Number.isFinite(imu.compass_yaw);
-      state.attitude = { yaw: compass ? imu.compass_yaw : (state.rover || {}).yaw || 0, pitch: imu.incl_pitch, roll: imu.incl_roll, source: compass ? "compass" : "estimate" };
-    }
-    const enc = encoderHtml(data.odometry);
-    if (enc) el("encoders").innerHTML = enc;
-    if (data.power) state.power = data.power;
-    if (data.motion_stopped) log.add("event", `cycle ${data.cycle}: motion stopped: ${data.motion_stopped}`);
+    const frame = data.frame || (data.clouds !== undefined ? data : busFrames.get(data.bus_seq));
+    if (frame) onFrame(data.cycle, frame);
+  } else if (topic === "/log") {
+    const kind = (data.level || 0) >= 3 ? "error" : "event";
+    log.add(kind, `${data.name ? data.name + ": " : ""}${data.message}`);
   } else if (topic === "/navigation/plan") {
     map.plan = data.points || [];
   } else if (topic === "/sim/hazard_contacts") {
@@ -83,9 +78,35 @@ function onTelemetry(topic, t, data) {
   dirty = true;
 }
 
+// One sensor frame: sensed ground, proximity, attitude, encoders, power.
+function onFrame(cycle, frame) {
+  if (frame.clouds && frame.clouds.length) {
+    // Placed with the truth of the same cycle, which follows in the log.
+    if (cycle === 0 && map.truth.length === 0 && map.world) map.addClouds(frame.clouds, map.world.start);
+    else state.pending = { cycle, clouds: frame.clouds };
+  }
+  map.proximity = frame.proximity;
+  const imu = frame.imu && frame.imu.length ? frame.imu[frame.imu.length - 1] : null;
+  if (imu) {
+    const compass = Number.isFinite(imu.compass_yaw);
+    state.attitude = { yaw: compass ? imu.compass_yaw : (state.rover || {}).yaw || 0, pitch: imu.incl_pitch, roll: imu.incl_roll, source: compass ? "compass" : "estimate" };
+  }
+  const enc = encoderHtml(frame.odometry);
+  if (enc) el("encoders").innerHTML = enc;
+  if (frame.power) state.power = frame.power;
+  if (frame.motion_stopped) log.add("event", `cycle ${cycle}: motion stopped: ${frame.motion_stopped}`);
+  state.frames++;
+}
+
 function showCamera() {
   const img = state.cameras[el("camsel").value];
-  if (img && drawImage(el("camera"), img)) {
+  if (img && img.format) {
+    // foxglove.CompressedImage: PNG or JPEG bytes.
+    const pic = new Image();
+    pic.onload = () => { const c = el("camera"); c.width = pic.width; c.height = pic.height; c.getContext("2d").drawImage(pic, 0, 0); };
+    pic.src = `data:image/${img.format === "jpeg" ? "jpeg" : "png"};base64,${img.data}`;
+    el("caminfo").textContent = `${img.frame_id} (${img.format}) at t = ${fmt(img.timestamp.sec + img.timestamp.nsec / 1e9, 1)} s`;
+  } else if (img && drawImage(el("camera"), img)) {
     el("caminfo").textContent = `${img.frame_id} ${img.width}x${img.height} ${img.encoding} at t = ${img.timestamp.sec}.${String(img.timestamp.nsec).padStart(9, "0").slice(0, 1)} s`;
   }
 }
@@ -113,10 +134,10 @@ function onMessage(text) {
       break;
     case "phase":
       state.phase = m.phase; state.outcome = m.outcome; showPhase();
-      log.add("event", `mission ${m.phase}${m.outcome ? ": " + m.outcome : ""}`);
+      log.add("event", `phase: ${m.phase}${m.outcome ? " (" + m.outcome + ")" : ""}`);
       break;
     case "reset":
-      map.reset(); state.components = {}; state.pending = null; state.rover = null; break;
+      map.reset(); busFrames.clear(); state.components = {}; state.pending = null; state.rover = null; break;
     case "time": {
       const r = state.replay; state.simTime = m.t_ns / 1e9;
       el("scrub").value = r.end_ns > r.start_ns ? Math.round(1000 * (m.t_ns - r.start_ns) / (r.end_ns - r.start_ns)) : 1000;

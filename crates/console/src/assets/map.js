@@ -18,6 +18,22 @@ function b64f32(text) {
   return out;
 }
 
+// Byte planes of little-endian f32 (every value's first byte, then every second...).
+function b64f32planes(text) {
+  const bytes = b64bytes(text), n = bytes.length >> 2, out = new Float32Array(n);
+  const view = new DataView(new ArrayBuffer(4));
+  for (let i = 0; i < n; i++) {
+    for (let k = 0; k < 4; k++) view.setUint8(k, bytes[k * n + i]);
+    out[i] = view.getFloat32(0, true);
+  }
+  return out;
+}
+
+// A world message's heights, in either encoding the log has used.
+function worldHeights(terrain) {
+  return terrain.heights_f32_planes !== undefined ? b64f32planes(terrain.heights_f32_planes) : b64f32(terrain.heights_f32le);
+}
+
 // Elevation colour ramp: low blue, green, yellow, high red-brown.
 function ramp(f) {
   const stops = [[0, [40, 70, 160]], [0.3, [60, 150, 90]], [0.6, [220, 200, 80]], [1, [170, 80, 50]]];
@@ -55,11 +71,12 @@ class RoverMap {
 
   setWorld(w) {
     const g = w.terrain.grid;
+    const heights = (t) => t.heights_f32_planes || t.heights_f32le || "";
     const same = this.world && JSON.stringify(this.world.terrain.grid) === JSON.stringify(g) &&
-      this.world.terrain.heights_f32le.length === w.terrain.heights_f32le.length;
+      heights(this.world.terrain) === heights(w.terrain);
     this.world = w;
     if (!same) {
-      this.heights = b64f32(w.terrain.heights_f32le);
+      this.heights = worldHeights(w.terrain);
       this.renderTerrain();
       this.makeFog();
     }
@@ -102,6 +119,7 @@ class RoverMap {
     ctx.fillStyle = "rgba(0,0,0,0.55)";
     ctx.fillRect(0, 0, c.width, c.height);
     this.fog = c;
+    this.sensed = new Uint8Array(c.width * c.height);
     this.sensedCount = 0;
   }
 
@@ -118,10 +136,16 @@ class RoverMap {
         const x = pose.x + cy * p[i] - sy * p[i + 1], y = pose.y + sy * p[i] + cy * p[i + 1];
         const cx = Math.floor((x - g.origin_x) / cell), ry = Math.floor((y - g.origin_y) / cell);
         if (cx < 0 || ry < 0 || cx >= this.fog.width || ry >= this.fog.height) continue;
-        ctx.clearRect(cx, this.fog.height - 1 - ry, 1, 1);
-        this.sensedCount++;
+        const k = ry * this.fog.width + cx;
+        if (!this.sensed[k]) { this.sensed[k] = 1; this.sensedCount++; ctx.clearRect(cx, this.fog.height - 1 - ry, 1, 1); }
       }
     }
+  }
+
+  isSensed(x, y) {
+    const g = this.world.terrain.grid, cell = g.resolution * this.fogScale;
+    const cx = Math.floor((x - g.origin_x) / cell), ry = Math.floor((y - g.origin_y) / cell);
+    return cx >= 0 && ry >= 0 && cx < this.fog.width && ry < this.fog.height && this.sensed[ry * this.fog.width + cx] === 1;
   }
 
   fit() {
@@ -216,10 +240,12 @@ class RoverMap {
     ctx.imageSmoothingEnabled = false;
     ctx.drawImage(this.terrain, this.ox, this.oy, w, h);
     ctx.drawImage(this.fog, this.ox, this.oy, w, h);
+    // Rocks: hazards in red once sensed, faint until then.
     for (const rock of this.world.terrain.rocks || []) {
       const [x, y] = this.toCanvas(rock.x, rock.y);
       ctx.beginPath(); ctx.arc(x, y, Math.max(1.5, rock.diameter / 2 * this.scale), 0, 2 * Math.PI);
-      ctx.strokeStyle = "rgba(255,80,60,0.8)"; ctx.lineWidth = 1; ctx.stroke();
+      ctx.strokeStyle = this.isSensed(rock.x, rock.y) ? "rgba(255,60,40,0.95)" : "rgba(0,0,0,0.25)";
+      ctx.lineWidth = 1; ctx.stroke();
     }
     const goal = this.world.goal;
     for (const z of goal.keep_out || []) this.zone(z, "rgba(255,0,0,0.25)", "#f44", true);

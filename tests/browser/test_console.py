@@ -1,0 +1,177 @@
+"""The operator console in a real browser (Debian's chromium and chromedriver, Python selenium).
+
+One `rovernav serve` holds the default mission for a plan; a commanding browser and a watching
+one talk to it: the page refuses without the token, draws the map, plans a mission by clicks,
+watches the rover move, answers `status` in its log, and the watcher cannot command. The run's
+report.json then shows the clicked goal (its straight-line distance from the start).
+
+Run by tests/browser/run.sh (ROVERNAV_BIN names the binary); saves docs/images/console.png.
+"""
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+import unittest
+import urllib.error
+import urllib.request
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.action_chains import ActionChains
+from selenium.webdriver.common.by import By
+from selenium.webdriver.common.keys import Keys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BIN = os.environ.get("ROVERNAV_BIN", os.path.join(ROOT, "target", "release", "rovernav"))
+FLAGS = ("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+         "--disable-background-networking --disable-component-update --disable-sync").split()
+START = (5.0, 5.0)  # the default mission's start
+WAYPOINT = (8.0, 9.0)
+GOAL = (12.0, 13.0)
+
+
+def browser(user_dir):
+    options = webdriver.ChromeOptions()
+    for flag in FLAGS + ["--window-size=1400,1250", "--user-data-dir=" + user_dir]:
+        options.add_argument(flag)
+    options.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
+    service = Service(shutil.which("chromedriver") or "/usr/bin/chromedriver")
+    return webdriver.Chrome(options=options, service=service)
+
+
+def wait(what, pred, timeout=60.0):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        value = pred()
+        if value:
+            return value
+        time.sleep(0.2)
+    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+class ConsoleInABrowser(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="rovernav-browser-")
+        cls.out = os.path.join(cls.tmp, "run")
+        token_file = os.path.join(cls.tmp, "token")
+        with open(token_file, "w") as f:
+            f.write("browser-test-token\n")
+        cls.server = subprocess.Popen(
+            [BIN, "serve", os.path.join(ROOT, "missions", "default.toml"), "--wait", "--speed", "30",
+             "--listen", "127.0.0.1:0", "--token-file", token_file, "--out", cls.out, "--exit-when-done"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        cls.url = cls.server.stdout.readline().strip()
+        assert cls.url.endswith("/?token=browser-test-token"), f"first line: {cls.url!r}"
+        cls.base = cls.url.split("/?")[0]
+        cls.commander = browser(os.path.join(cls.tmp, "chrome-a"))
+        cls.watcher = None
+
+    @classmethod
+    def tearDownClass(cls):
+        for d in (cls.commander, cls.watcher):
+            if d is not None:
+                d.quit()
+        if cls.server.poll() is None:
+            cls.server.terminate()
+            cls.server.wait(10)
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def js(self, expr, driver=None):
+        return (driver or self.commander).execute_script("return " + expr)
+
+    def log_texts(self, driver=None):
+        return self.js("rovernav.log.texts()", driver)
+
+    def test_1_without_the_token_the_console_is_refused(self):
+        with self.assertRaises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(self.base + "/")
+        self.assertEqual(refused.exception.code, 401)
+        self.commander.get(self.base + "/")
+        self.assertIn("Access token", self.commander.page_source)
+        self.assertEqual(self.commander.find_elements(By.ID, "map"), [], "no console without the token")
+        with self.assertRaises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(self.base + "/ws?token=wrong")
+        self.assertEqual(refused.exception.code, 401)
+
+    def test_2_the_map_draws_the_world(self):
+        self.commander.get(self.url)
+        wait("the world", lambda: self.js("rovernav.state.world && rovernav.map.draws > 0"))
+        self.assertEqual(self.js("rovernav.state.phase"), "waiting")
+        self.assertEqual(self.js("rovernav.state.holder"), self.js("rovernav.state.client"), "first come commands")
+        # The terrain is drawn in colours: the map's pixels are far from uniform.
+        spread = self.js("""(() => { const c = document.getElementById('map').getContext('2d');
+            const d = c.getImageData(100, 100, 500, 500).data; const seen = new Set();
+            for (let i = 0; i < d.length; i += 4 * 97) seen.add(d[i] >> 4 << 8 | d[i + 1] >> 4 << 4 | d[i + 2] >> 4);
+            return seen.size; })()""")
+        self.assertGreater(spread, 20, "the terrain's elevation colours are drawn")
+
+    def click_world(self, x, y):
+        canvas = self.commander.find_element(By.ID, "map")
+        cx, cy = self.js(f"rovernav.map.worldToClient({x}, {y})")
+        rect = canvas.rect
+        ActionChains(self.commander).move_to_element_with_offset(
+            canvas, cx - rect["width"] / 2, cy - rect["height"] / 2).click().perform()
+
+    def test_3_a_clicked_plan_starts_the_mission_and_the_rover_moves(self):
+        self.commander.find_element(By.CSS_SELECTOR, 'input[value="waypoint"]').click()
+        self.click_world(*WAYPOINT)
+        self.commander.find_element(By.CSS_SELECTOR, 'input[value="goal"]').click()
+        self.click_world(*GOAL)
+        draft = self.js("rovernav.draft")
+        self.assertEqual(len(draft["waypoints"]), 1)
+        self.assertLess(math.dist((draft["goal"]["x"], draft["goal"]["y"]), GOAL), 0.15, draft)
+        self.commander.find_element(By.ID, "send").click()
+        wait("the mission to run", lambda: self.js("rovernav.state.phase") == "running")
+        goal = self.js("rovernav.map.world.goal")
+        self.assertLess(math.dist((goal["position"]["x"], goal["position"]["y"]), GOAL), 0.15, goal)
+        self.assertEqual(len(goal["waypoints"]), 1)
+        first = wait("the rover's pose", lambda: self.js("rovernav.state.rover"))
+        wait("the rover icon to move", lambda: math.dist(
+            (first["x"], first["y"]), (lambda p: (p["x"], p["y"]))(self.js("rovernav.state.rover"))) > 1.0)
+        self.assertGreater(self.js("rovernav.map.sensedCount"), 0, "sensed ground is drawn")
+        type(self).goal = (goal["position"]["x"], goal["position"]["y"])
+
+    def test_4_status_in_the_command_line_answers_in_the_log(self):
+        line = self.commander.find_element(By.ID, "cmd")
+        line.send_keys("stat", Keys.TAB)
+        self.assertEqual(line.get_attribute("value").strip(), "status", "Tab completes from `help`")
+        line.send_keys(Keys.ENTER)
+        answer = wait("the status answer", lambda: [t for t in self.log_texts() if t.startswith("mission running ·")])
+        self.assertIn("goal (", answer[0])
+
+    def test_5_a_second_client_watches_but_cannot_command(self):
+        type(self).watcher = browser(os.path.join(self.tmp, "chrome-b"))
+        w = self.watcher
+        w.get(self.url)
+        wait("the watcher's world", lambda: self.js("rovernav.state.world", w))
+        self.assertNotEqual(self.js("rovernav.state.holder", w), self.js("rovernav.state.client", w))
+        self.assertIn("watching", w.find_element(By.ID, "role").text)
+        wait("the path so far", lambda: self.js("rovernav.map.truth.length", w) > 1)
+        cmd = w.find_element(By.ID, "cmd")
+        cmd.send_keys("mission abort", Keys.ENTER)
+        wait("the refusal", lambda: [t for t in self.log_texts(w) if "holds command authority" in t])
+        time.sleep(1.0)
+        self.assertEqual(self.js("rovernav.state.phase", w), "running", "the watcher's abort did nothing")
+        self.assertFalse([t for t in self.log_texts() if t.startswith("mission aborted")])
+
+    def test_6_the_report_has_the_clicked_goal(self):
+        state = wait("the mission's end", lambda: self.js("rovernav.state.phase") == "done", timeout=240)
+        self.assertTrue(state)
+        os.makedirs(os.path.join(ROOT, "docs", "images"), exist_ok=True)
+        self.commander.save_screenshot(os.path.join(ROOT, "docs", "images", "console.png"))
+        self.server.wait(60)
+        with open(os.path.join(self.out, "report.json")) as f:
+            report = json.load(f)
+        self.assertEqual(report["outcome"], "reached", report["message"])
+        # The goal the run was scored against is the clicked one.
+        self.assertAlmostEqual(report["straight_line_m"], math.dist(START, self.goal), places=6)
+        self.assertEqual(self.js("rovernav.state.outcome"), "reached")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
