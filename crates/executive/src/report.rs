@@ -12,6 +12,29 @@ pub fn run_message(outcome: rovernav_core::Outcome, navigator_message: &str, goa
     }
 }
 
+impl Report {
+    /// The report with the route's figures: of `waypoints + 1` route points, how many the
+    /// route's drive tasks (the plan's first `drive_to` tasks) reached; and the peak resident
+    /// memory when `measure_memory`.
+    pub fn with_route_and_memory(mut self, waypoints: usize, measure_memory: bool) -> Self {
+        let total = waypoints + 1;
+        let drives = self.tasks.iter().filter(|t| t.kind == "drive_to").take(total);
+        self.waypoints_reached = drives.filter(|t| t.state == "success").count() as u32;
+        self.waypoints_total = total as u32;
+        self.peak_rss_mb = if measure_memory { peak_rss_mb() } else { None };
+        self
+    }
+}
+
+/// The process's peak resident set size (MB) from `/proc/self/status` (VmHWM), to 0.1 MB;
+/// None where that file is missing.
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.trim_start_matches("VmHWM:").trim().trim_end_matches("kB").trim().parse().ok()?;
+    Some((kb / 1024.0 * 10.0).round() / 10.0)
+}
+
 /// The outcome and figures of one traverse.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct Report {
@@ -67,6 +90,17 @@ pub struct Report {
     /// The localiser's correction counters (null when unknown, e.g. recomputed from a cut-off log).
     #[serde(default)]
     pub localization_stats: Option<LocalizationStats>,
+    /// Waypoints and goal the rover reached (by its own judgement: the route's drive tasks that
+    /// succeeded).
+    #[serde(default)]
+    pub waypoints_reached: u32,
+    /// Waypoints plus the goal.
+    #[serde(default)]
+    pub waypoints_total: u32,
+    /// Peak resident memory of the process at the end of the run (MB, VmHWM); null when not
+    /// measured (runs inside tests) or unknown.
+    #[serde(default)]
+    pub peak_rss_mb: Option<f64>,
     /// The battery and the rover's sleep (absent without power readings).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub power: Option<crate::power::PowerReport>,

@@ -98,6 +98,22 @@ pub struct Progress {
     pub time_fraction: f64,
     /// True distance to the goal (m).
     pub distance_to_goal_m: f64,
+    /// Distance driven so far (m, planar, between cycles; by the estimate across a link).
+    pub distance_driven_m: f64,
+    /// Distance still to go along the route: to the next waypoint, then leg by leg to the goal
+    /// (m, straight lines).
+    pub route_to_go_m: f64,
+}
+
+/// The length of the route from `at` through `points` in order (m, straight legs).
+pub fn route_to_go(at: Point2, points: &[Point2]) -> f64 {
+    let mut length = 0.0;
+    let mut from = at;
+    for &p in points {
+        length += from.dist(p);
+        from = p;
+    }
+    length
 }
 
 /// One navigator cycle as the loop saw it, for telemetry and other observers.
@@ -222,6 +238,11 @@ pub struct RunOptions {
     pub arm: ArmConfig,
     /// The bus.
     pub bus: BusKind,
+    /// The tiled terrain the simulator drives on through a window (`kind = "tiled"`; none for a
+    /// fixed terrain).
+    pub tiles: Option<crate::world::TiledSource>,
+    /// Whether the report gives the process's peak resident memory (`peak_rss_mb`).
+    pub measure_peak_rss: bool,
     /// Sleep and wake thresholds on the battery's charge (`[power]`).
     pub power: crate::power::PowerPolicy,
 }
@@ -234,6 +255,7 @@ impl RunOptions {
             tasks: mission.plan_tasks(&to_local),
             faults: mission.fault_schedule(),
             crashes: mission.crash_schedule(),
+            tiles: crate::world::tiled_source(mission),
             power: mission.power.policy(),
             ..Self::default()
         }
@@ -298,6 +320,12 @@ impl<'a> Run<'a> {
     /// Replaces the tasks, faults, component parameters and bus.
     pub fn options(mut self, options: RunOptions) -> Self {
         self.options = options;
+        self
+    }
+
+    /// Gives the process's peak resident memory in the report (`peak_rss_mb`).
+    pub fn measure_peak_rss(mut self) -> Self {
+        self.options.measure_peak_rss = true;
         self
     }
 

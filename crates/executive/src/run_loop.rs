@@ -55,6 +55,10 @@ pub(crate) fn assemble(
                 world.start,
                 settings.seed,
             );
+            let sim = match &options.tiles {
+                Some(tiles) => sim.with_window(tiles.window()),
+                None => sim,
+            };
             Box::new(SimPlatform::new(sim, options.faults.clone()))
         }
         Some(link) => Box::new(RemotePlatform::new(link, &settings.name, settings.seed)),
@@ -110,6 +114,8 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
     runtime.settle(runtime.clock())?;
 
     let mut cycles = 0u64;
+    // Planar distance between successive positions, for the progress bar.
+    let (mut driven, mut last_at) = (0.0, None);
     let mut crashes = options.crashes.clone();
     let mut crashed = Vec::new();
     let (outcome, message) = loop {
@@ -142,11 +148,18 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         let estimate = estimator(&runtime).estimate();
         let overlays = if observer.wants_overlays() { navigator_of(&runtime).overlays() } else { Vec::new() };
         let goal = deliberative.goal().unwrap_or(world.goal.position);
-        let progress = |cycles: u64, t: f64, distance_to_goal_m: f64| Progress {
-            cycles,
-            sim_time_s: t,
-            time_fraction: (t / settings.time_limit_s).min(1.0),
-            distance_to_goal_m,
+        let route = route_ahead(&deliberative);
+        let mut progress = |cycles: u64, t: f64, at: Point2| {
+            driven += last_at.map_or(0.0, |p: Point2| p.dist(at));
+            last_at = Some(at);
+            Progress {
+                cycles,
+                sim_time_s: t,
+                time_fraction: (t / settings.time_limit_s).min(1.0),
+                distance_to_goal_m: at.dist(goal),
+                distance_driven_m: driven,
+                route_to_go_m: crate::run::route_to_go(at, &route),
+            }
         };
         match scorer.as_mut() {
             Some(scorer) => {
@@ -165,7 +178,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
                         hazard_contacts: e.hazard_contacts,
                         overlays: &overlays,
                     });
-                    on_progress(&progress(cycles, e.frame.t, Point2::new(e.truth.x, e.truth.y).dist(goal)));
+                    on_progress(&progress(cycles, e.frame.t, Point2::new(e.truth.x, e.truth.y)));
                 }
             }
             None => {
@@ -173,8 +186,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
                     cycles += 1;
                     trace.estimate.push(estimate.pose);
                     // The rover process knows no truth: progress shows the estimated distance to go.
-                    let to_go = Point2::new(estimate.pose.x, estimate.pose.y).dist(goal);
-                    on_progress(&progress(cycles, frame.t, to_go));
+                    on_progress(&progress(cycles, frame.t, Point2::new(estimate.pose.x, estimate.pose.y)));
                 }
             }
         }
@@ -241,7 +253,8 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         localization_stats: Some(estimator(&runtime).localizer_stats().into()),
         injected_faults: injected,
         ..executive_outcome(&runtime, &deliberative)
-    };
+    }
+    .with_route_and_memory(world.goal.waypoints.len(), options.measure_peak_rss);
     observer.on_finish(&report, &trace);
     Ok(RunOutput { report, trace, world })
 }
@@ -317,6 +330,19 @@ fn algorithms(
 /// the first leg and the later ones, which the navigator component builds afresh.
 pub(crate) fn registry_name(mission: &RunSettings) -> String {
     rovernav_navigation::registry().decorated(&mission.navigator, &mission.localizer)
+}
+
+/// The route's points still to reach: the targets of the drive tasks not yet ended, in order.
+fn route_ahead(deliberative: &Deliberative) -> Vec<Point2> {
+    use crate::messages::TaskState;
+    deliberative
+        .tasks()
+        .iter()
+        .filter(|t| {
+            t.kind.name() == "drive_to" && matches!(t.state, TaskState::Pending | TaskState::InProcess)
+        })
+        .filter_map(|t| t.kind.target())
+        .collect()
 }
 
 /// The report's executive part: final component states, the diagnosed fault and each task's

@@ -1,10 +1,11 @@
 //! Building the world a mission names: terrain, rover, sensors, start and goal in local metres.
 
-use crate::mission::{GoalSpec, Mission, PoseSpec, RangeSourceSpec, TerrainSpec};
+use crate::mission::{GoalSpec, Mission, PoseSpec, RangeSourceSpec, TerrainSpec, TiledSpec};
 use rovernav_core::{Goal, Point2, Pose2, RoverConfig};
 use rovernav_planning::{Cell, CostGrid, FieldDStar, GlobalPlanner};
-use rovernav_sim::{RangeSource, SensorModel};
+use rovernav_sim::{RangeSource, SensorModel, TerrainWindow};
 use rovernav_terrain::procedural::{ClearPad, RockyRegionParams, rocky_region};
+use rovernav_terrain::tiled::{TiledParams, TiledTerrain};
 use rovernav_terrain::{LocalRect, MarsYardParams, RockFieldParams, Terrain};
 use std::path::PathBuf;
 
@@ -171,6 +172,10 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
             let to_local = move |e: f64, n: f64| (e - geo.easting, n - geo.northing);
             (terrain, Box::new(to_local))
         }
+        TerrainSpec::Tiled(spec) => {
+            let source = TiledSource::of(mission, spec).map_err(|e| invalid("terrain", e))?;
+            (source.overview(mission).map_err(|e| invalid("terrain", e))?, Box::new(|e, n| (e, n)))
+        }
     };
 
     let start_xy = local_point(&mission.start_xy(), &*to_local);
@@ -228,6 +233,102 @@ pub fn goal_frame_to_local(mission: &Mission, world: &World) -> impl Fn(f64, f64
     let projected = matches!(mission.terrain, TerrainSpec::Dem { .. }) && mission.goal.easting.is_some();
     let (e0, n0) = (world.terrain.dem.geo.easting, world.terrain.dem.geo.northing);
     move |x, y| if projected { Point2::new(x - e0, y - n0) } else { Point2::new(x, y) }
+}
+
+/// A tiled terrain's generator and the simulator's window onto it (`kind = "tiled"`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiledSource {
+    /// The tiles' parameters (seed, yard model, clear pads at the start, waypoints and goal).
+    pub params: TiledParams,
+    /// Side of the simulator's window of finest cells (m).
+    pub window_m: f64,
+}
+
+/// Tiles along a side at the finest level.
+const TILE_CELLS: usize = 512;
+
+/// Largest overview grid (cells).
+const OVERVIEW_MAX_CELLS: usize = 1_000_000;
+
+/// Margin of the overview around the route (m).
+const OVERVIEW_MARGIN_M: f64 = 60.0;
+
+impl TiledSource {
+    /// The source of a mission's tiled terrain; the error says which value does not fit.
+    pub fn of(mission: &Mission, spec: &TiledSpec) -> Result<Self, String> {
+        // Octaves down to the yard's finest relief wavelength (0.375 m for its 12 m, 6 octaves).
+        let octaves = 1 + (spec.relief_wavelength_m / 0.375).log2().floor().clamp(0.0, 15.0) as u32;
+        let pads = route_points(mission).into_iter().map(pad).collect();
+        let yard = MarsYardParams {
+            resolution: spec.resolution_m,
+            seed: mission.seed,
+            relief_amplitude_m: spec.relief_m,
+            relief_wavelength_m: spec.relief_wavelength_m,
+            relief_octaves: octaves,
+            roughness: spec.roughness,
+            crater_density: spec.craters_per_hectare / 10_000.0,
+            crater_max_diameter_m: spec.crater_max_diameter_m,
+            ridge_amplitude_m: spec.ridge_m,
+            ridge_wavelength_m: spec.ridge_wavelength_m,
+            ridge_azimuth_deg: spec.ridge_azimuth_deg,
+            regional_slope_deg: spec.slope_deg,
+            rocks: RockFieldParams { abundance: spec.rock_abundance, ..Default::default() },
+            clear_pads: pads,
+            ..MarsYardParams::default()
+        };
+        let params = TiledParams::new(yard, TILE_CELLS).map_err(|e| e.to_string())?;
+        Ok(Self { params, window_m: spec.window_m })
+    }
+
+    /// The simulator's window onto these tiles.
+    pub fn window(&self) -> TerrainWindow {
+        let cache = TiledTerrain::new(self.params.clone(), window_cache_tiles(self))
+            .expect("parameters checked when the source was made");
+        TerrainWindow::new(cache, 0.5 * self.window_m, rovernav_sim::terrain_window::DEFAULT_MARGIN_M)
+    }
+
+    /// The world's terrain: a coarse overview of the route and its surroundings (bare ground at
+    /// the finest level of at most [`OVERVIEW_MAX_CELLS`] cells), for drawing, the operator's
+    /// area and the sensed-cell grid; the simulator drives on its fine window.
+    fn overview(&self, mission: &Mission) -> Result<Terrain, String> {
+        let points = route_points(mission);
+        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+        for p in &points {
+            (x0, y0, x1, y1) = (x0.min(p.x), y0.min(p.y), x1.max(p.x), y1.max(p.y));
+        }
+        if !points.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            return Err("start, goal and waypoints need x and y (local metres) on a tiled terrain".into());
+        }
+        let m = OVERVIEW_MARGIN_M;
+        let rect = LocalRect { x_min: x0 - m, y_min: y0 - m, x_max: x1 + m, y_max: y1 + m };
+        let area = (rect.x_max - rect.x_min) * (rect.y_max - rect.y_min);
+        let level = self.params.level_for((area / OVERVIEW_MAX_CELLS as f64).sqrt());
+        let mut tiles = TiledTerrain::new(self.params.clone(), 64).map_err(|e| e.to_string())?;
+        tiles.fill(rect, level).map_err(|e| e.to_string())
+    }
+}
+
+/// Tiles the window's cache holds: those a window covers, twice over (a re-centred window and
+/// the last one).
+fn window_cache_tiles(source: &TiledSource) -> usize {
+    let per_side = (source.window_m / source.params.tile_size_m()).ceil() as usize + 1;
+    2 * per_side * per_side
+}
+
+/// The source of a mission's tiled terrain, if it has one.
+pub fn tiled_source(mission: &Mission) -> Option<TiledSource> {
+    match &mission.terrain {
+        TerrainSpec::Tiled(spec) => TiledSource::of(mission, spec).ok(),
+        _ => None,
+    }
+}
+
+/// Start, waypoints and goal of a mission in local metres (NaN where given as projected).
+fn route_points(mission: &Mission) -> Vec<Point2> {
+    let mut points = vec![local_point(&mission.start_xy(), &|e, n| (e, n))];
+    points.extend(mission.goal.waypoints.iter().map(|w| Point2::new(w[0], w[1])));
+    points.push(local_point(&mission.goal_xy(), &|e, n| (e, n)));
+    points
 }
 
 /// Maps projected (easting, northing) to the terrain's local frame.
@@ -301,7 +402,13 @@ pub const OPTIMAL_PATH_RESOLUTION: f64 = 0.1;
 /// Length of the shortest safe path with full knowledge of the true terrain (m), if one exists:
 /// Field D* (any-angle) through the cells where the simulator's hazard model says the rover
 /// centre is safe in every heading.
+///
+/// None on a tiled terrain: the world holds only its coarse overview, and a hazard grid of a
+/// whole long route at rover scale would not fit in memory.
 pub fn optimal_length(world: &World) -> Option<f64> {
+    if world.terrain.dem.geo.crs == rovernav_terrain::tiled::TILED_CRS {
+        return None;
+    }
     optimal_length_on(world, &true_hazard(world))
 }
 

@@ -312,22 +312,20 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
     );
     bar.set_message(format!("{} / {}", mission.name, mission.navigator));
     let mut plain = progress::PlainProgress::for_stderr();
+    let mut eta = progress::Eta::default();
     let mut on_progress = |p: &rovernav_executive::Progress| {
         bar.set_position((p.time_fraction * 1000.0) as u64);
-        bar.set_message(format!("cycle {} · {:.1} m to goal", p.cycles, p.distance_to_goal_m));
+        let line = progress::long_run_line(p, eta.update(p.route_to_go_m, p.sim_time_s));
+        bar.set_message(line.clone());
         plain.tick(|| {
-            format!(
-                "{}: cycle {} · {:.1} m to goal · {:.0} % of the time budget",
-                mission.name,
-                p.cycles,
-                p.distance_to_goal_m,
-                100.0 * p.time_fraction
-            )
+            format!("{}: {line} · {:.0} % of the time budget", mission.name, 100.0 * p.time_fraction)
         });
     };
     // The world is built before telemetry.mcap is created, so a mission that cannot be built
     // leaves no log; every topic of the run goes to the log, finished even when the run fails.
-    let run = Run::mission(&mission, &origin_of_navigator).inspect_err(|_| bar.finish_and_clear())?;
+    let run = Run::mission(&mission, &origin_of_navigator)
+        .inspect_err(|_| bar.finish_and_clear())?
+        .measure_peak_rss();
     let mut log = output::RunLog::open(&out_dir)?;
     let output = run.progress(&mut on_progress).observer(&mut log.recorder).execute();
     bar.finish_and_clear();

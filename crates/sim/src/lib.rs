@@ -16,6 +16,7 @@ pub mod scenes;
 pub mod sensors;
 pub mod simulator;
 pub mod stereo_range;
+pub mod terrain_window;
 pub mod vehicle;
 
 pub use hazard::true_hazard_grid;
@@ -25,4 +26,5 @@ pub use raycast::{HeightField, RayHit};
 pub use sensors::{LidarModel, ProximityModel, RangeImagerModel, SensorModel};
 pub use simulator::{Fault, Simulator};
 pub use stereo_range::{RangeSource, StereoImaging};
+pub use terrain_window::TerrainWindow;
 pub use vehicle::{Hazard, SlipModel, VehicleGeometry};

@@ -22,6 +22,7 @@ use crate::power::PowerModel;
 use crate::raycast::HeightField;
 use crate::sensors::{self, Proprioception, RangeGeometry, SensorModel, gaussian};
 use crate::stereo_range::{self, RangeSource};
+use crate::terrain_window::TerrainWindow;
 use crate::vehicle::{self, VehicleGeometry};
 
 /// Time the motor-current monitor takes to declare a stalled wheel (s).
@@ -82,6 +83,9 @@ pub struct Simulator {
     faults: Faults,
     /// The proximity reading that stopped the current motion, if a guard did.
     guard_reading: Option<ProximityReading>,
+    /// The window onto a tiled terrain that `terrain` is, for long traverses (none for a fixed
+    /// terrain).
+    window: Option<Box<TerrainWindow>>,
     /// The solar panel, battery and loads.
     power: PowerModel,
 }
@@ -131,6 +135,7 @@ impl Simulator {
             image_rng: stream(seed, 5),
             faults: Faults::default(),
             guard_reading: None,
+            window: None,
             power: PowerModel::new(sensors.power.clone()),
             terrain,
             rover,
@@ -257,6 +262,38 @@ impl Simulator {
     /// The true terrain.
     pub fn terrain(&self) -> &Terrain {
         &self.terrain
+    }
+
+    /// Makes the terrain a window onto a tiled terrain: filled around the rover now (which
+    /// settles on it again) and re-filled whenever a motion brings the rover within the
+    /// window's margin of its edge.
+    pub fn with_window(mut self, window: TerrainWindow) -> Self {
+        self.window = Some(Box::new(window));
+        self.keep_in_window(self.pose.x, self.pose.y);
+        let contact = vehicle::settle(&self.terrain.dem, &self.geometry, self.pose);
+        self.in_hazard = contact
+            .as_ref()
+            .is_some_and(|c| vehicle::body_hazard(&self.terrain.dem, &self.geometry, c).is_some());
+        if let Some(c) = &contact {
+            self.truth = c.pose;
+        }
+        self.on_terrain = contact.is_some();
+        self
+    }
+
+    /// The window onto a tiled terrain, if the terrain is one.
+    pub fn window(&self) -> Option<&TerrainWindow> {
+        self.window.as_deref()
+    }
+
+    /// Re-fills the window around (x, y) when that point is within its margin of the edge.
+    fn keep_in_window(&mut self, x: f64, y: f64) {
+        if let Some(window) = self.window.as_mut()
+            && window.needs_refill(x, y)
+        {
+            self.terrain = window.fill_around(x, y);
+            self.field = HeightField::new(&self.terrain.dem);
+        }
     }
 
     /// The rover parameters.
@@ -453,6 +490,7 @@ impl Simulator {
         let slip_offset = gaussian(&mut self.motion_rng, slip.per_command_sigma);
         let scrubbed_half_track = 0.5 * self.rover.track * (1.0 + slip.turn_scrub);
         let mut elapsed = 0.0;
+        self.keep_in_window(self.pose.x, self.pose.y);
         let mut contact = match vehicle::settle(&self.terrain.dem, &self.geometry, self.pose) {
             Some(c) => c,
             None => {
@@ -483,6 +521,7 @@ impl Simulator {
                 self.pose.y + sm * advance + cm * creep,
                 wrap_angle(self.pose.yaw + d_yaw),
             );
+            self.keep_in_window(next.x, next.y);
             let Some(next_contact) = vehicle::settle(&self.terrain.dem, &self.geometry, next) else {
                 frame.motion_stopped = Some("left the terrain model".into());
                 break;

@@ -20,7 +20,7 @@ pub use route::{GoalSpec, PoseSpec};
 pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
 pub use sky::{SkyKind, SkySpec};
 pub use tasks::{TaskKindName, TaskSpecToml};
-pub use terrain::TerrainSpec;
+pub use terrain::{TerrainSpec, TiledSpec};
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};

@@ -41,6 +41,71 @@ pub enum TerrainSpec {
         #[serde(default)]
         rock_abundance: f64,
     },
+    /// Procedural terrain without edges, generated in tiles around the rover (long traverses).
+    Tiled(TiledSpec),
+}
+
+/// A tiled procedural terrain: the Mars-yard model at every scale from rocks to ridges,
+/// generated around the rover as it drives (`kind = "tiled"`).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TiledSpec {
+    /// Finest cell size, near the rover (m).
+    #[serde(default = "default_resolution")]
+    pub resolution_m: f64,
+    /// Golombek-Rapp rock abundance k (Pathfinder's site about 0.2).
+    #[serde(default = "default_tiled_rocks")]
+    pub rock_abundance: f64,
+    /// Amplitude of the fractal relief (m).
+    #[serde(default = "default_relief")]
+    pub relief_m: f64,
+    /// Wavelength of the largest relief features (m).
+    #[serde(default = "default_relief_wavelength")]
+    pub relief_wavelength_m: f64,
+    /// Roughness: amplitude ratio between successive relief octaves (0..1; lower is smoother
+    /// at small scales).
+    #[serde(default = "default_roughness")]
+    pub roughness: f64,
+    /// Height of the ridge lines (m).
+    #[serde(default)]
+    pub ridge_m: f64,
+    /// Spacing of the ridge lines across their direction (m).
+    #[serde(default = "default_ridge_wavelength")]
+    pub ridge_wavelength_m: f64,
+    /// Direction the ridge crests run (deg counter-clockwise from east).
+    #[serde(default)]
+    pub ridge_azimuth_deg: f64,
+    /// Regional slope (deg).
+    #[serde(default)]
+    pub slope_deg: f64,
+    /// Craters per 100 m x 100 m with diameter at least 1 m.
+    #[serde(default)]
+    pub craters_per_hectare: f64,
+    /// Largest crater diameter (m).
+    #[serde(default = "default_crater_max")]
+    pub crater_max_diameter_m: f64,
+    /// Side of the square window of finest cells the simulator keeps around the rover (m).
+    #[serde(default = "default_window")]
+    pub window_m: f64,
+}
+
+fn default_tiled_rocks() -> f64 {
+    0.2
+}
+fn default_relief_wavelength() -> f64 {
+    12.0
+}
+fn default_roughness() -> f64 {
+    0.5
+}
+fn default_ridge_wavelength() -> f64 {
+    9.0
+}
+fn default_crater_max() -> f64 {
+    8.0
+}
+fn default_window() -> f64 {
+    80.0
 }
 
 fn default_size() -> f64 {
@@ -110,6 +175,52 @@ impl TerrainSpec {
                     return Err(("terrain.region", "must be [min E, min N, max E, max N] with max > min"));
                 }
             }
+            TerrainSpec::Tiled(t) => t.check()?,
+        }
+        Ok(())
+    }
+}
+
+impl TiledSpec {
+    /// The first field out of range, as (field, why).
+    fn check(&self) -> Result<(), (&'static str, &'static str)> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        if !(0.01..=0.2).contains(&self.resolution_m) {
+            return Err(("terrain.resolution_m", "must be in [0.01, 0.2] m"));
+        }
+        if !(0.0..=0.5).contains(&self.rock_abundance) {
+            return Err(("terrain.rock_abundance", "must be in [0, 0.5]"));
+        }
+        if !non_negative(self.relief_m) || self.relief_m > 500.0 {
+            return Err(("terrain.relief_m", "must be in [0, 500] m"));
+        }
+        if !positive(self.relief_wavelength_m) || self.relief_wavelength_m > 1.0e5 {
+            return Err(("terrain.relief_wavelength_m", "must be in (0, 100000] m"));
+        }
+        if !(0.0..=1.0).contains(&self.roughness) {
+            return Err(("terrain.roughness", "must be in [0, 1]"));
+        }
+        if !non_negative(self.ridge_m) || self.ridge_m > 500.0 {
+            return Err(("terrain.ridge_m", "must be in [0, 500] m"));
+        }
+        if !positive(self.ridge_wavelength_m) || self.ridge_wavelength_m > 1.0e5 {
+            return Err(("terrain.ridge_wavelength_m", "must be in (0, 100000] m"));
+        }
+        if !self.ridge_azimuth_deg.is_finite() {
+            return Err(("terrain.ridge_azimuth_deg", "must be a number"));
+        }
+        if !(self.slope_deg.is_finite() && self.slope_deg.abs() < 45.0) {
+            return Err(("terrain.slope_deg", "must be within (-45, 45) deg"));
+        }
+        if !non_negative(self.craters_per_hectare) || self.craters_per_hectare > 1.0e4 {
+            return Err(("terrain.craters_per_hectare", "must be in [0, 10000]"));
+        }
+        if !(1.0..=100.0).contains(&self.crater_max_diameter_m) {
+            return Err(("terrain.crater_max_diameter_m", "must be in [1, 100] m"));
+        }
+        if !(20.0..=400.0).contains(&self.window_m) || (self.window_m / self.resolution_m).powi(2) > 1.6e7 {
+            return Err(("terrain.window_m", "must be in [20, 400] m and hold at most 1.6e7 cells"));
         }
         Ok(())
     }
