@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod auth;
+pub mod foxglove;
 pub mod hub;
 pub mod live;
 pub mod operator;
