@@ -165,7 +165,7 @@ fn combinations_are_chosen_by_options_and_old_names_stay_aliases() {
     )
     .unwrap();
     assert_eq!(m.localizer_spec(), "ekf-ml-targets");
-    let text = DEFAULT_MISSION_TOML.replace("\"dead-reckoning\"", "\"ekf-ml-targets\"");
+    let text = DEFAULT_MISSION_TOML.replace("\"ekf-ml\"", "\"ekf-ml-targets\"");
     assert_eq!(Mission::from_toml(&text, "m.toml").unwrap().localizer_spec(), "ekf-ml-targets");
     for (bad, field) in
         [("min_travel_m = -1.0", "localizer_params.min_travel_m"), ("warp = 1", "localizer_params.warp")]
