@@ -191,10 +191,17 @@ fn run_campaign(args: RunArgs) -> anyhow::Result<()> {
     // finished run (`campaign merge --partial` summarises them).
     let meta = CampaignMeta::of(&plan, shard);
     let row_log = rovernav_campaign::RowLog::start(&out_dir, &meta)?;
+    // Without a terminal the bar draws nothing: a plain line every few seconds instead.
+    let plain = std::sync::Mutex::new(crate::progress::PlainProgress::for_stderr());
     let on_done = |row: &rovernav_campaign::Row| {
         row_log.append(row);
         bar.inc(1);
-        bar.set_message(format!("trial {} {}: {}", row.trial, row.navigator, row.outcome));
+        let last = format!("trial {} {}: {}", row.trial, row.navigator, row.outcome);
+        if let Ok(mut plain) = plain.lock() {
+            let (done, total, elapsed) = (bar.position() as usize, jobs.len(), bar.elapsed().as_secs_f64());
+            plain.tick(|| crate::progress::campaign_line(&plan.spec.name, done, total, elapsed, &last));
+        }
+        bar.set_message(last);
     };
     let rows = rovernav_campaign::run_jobs(&plan, &jobs, threads, Some(&failures), &on_done);
     bar.finish_and_clear();
