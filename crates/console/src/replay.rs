@@ -5,7 +5,7 @@
 //! not make the reader allocate without limit; the telemetry reader's rule), so a log cut short
 //! by a killed run replays up to its last complete chunk.
 
-use crate::hub::{Channel, Message};
+use crate::hub::{Channel, Hub, Message};
 use crate::server_history::CUMULATIVE;
 use rovernav_telemetry::mcap;
 use rovernav_telemetry::mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
@@ -130,6 +130,25 @@ impl ReplayLog {
             .collect()
     }
 
+    /// Publishes the log into `hub` in log order, paced at `speed` simulated seconds per second
+    /// (`None`: all at once), for the watchers that follow a hub (the Foxglove server).
+    pub fn play_into(&self, hub: &Hub, speed: Option<f64>) {
+        for c in &self.channels {
+            hub.declare(&c.topic, &c.schema_name, &c.schema);
+        }
+        let started = std::time::Instant::now();
+        for m in &self.messages {
+            if let Some(speed) = speed {
+                let due = (m.time_ns - self.start_ns()) as f64 / 1e9 / speed;
+                let now = started.elapsed().as_secs_f64();
+                if due > now {
+                    std::thread::sleep(std::time::Duration::from_secs_f64(due - now));
+                }
+            }
+            hub.publish(&self.channels[m.channel as usize - 1].topic, m.time_ns, &m.json);
+        }
+    }
+
     fn is_cumulative(&self, channel: u32) -> bool {
         self.cumulative.get(channel as usize - 1).copied().unwrap_or(false)
     }
@@ -167,6 +186,17 @@ mod tests {
         let images: Vec<u64> = state.iter().filter(|m| m.channel == 2).map(|m| m.time_ns).collect();
         assert_eq!(truth, [0, 10, 20, 30, 40]);
         assert_eq!(images, [35], "only the latest image up to the time");
+    }
+
+    #[test]
+    fn played_into_a_hub_the_log_is_the_hubs_latest() {
+        let log = ReplayLog::parse(&log_bytes("hub")).unwrap();
+        let hub = Hub::new(64);
+        log.play_into(&hub, None);
+        let snap = hub.snapshot();
+        assert_eq!(snap.channels.len(), 2);
+        let times: Vec<u64> = snap.latest.iter().map(|m| m.time_ns).collect();
+        assert_eq!(times, [90, 95]);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 mod console_client;
 
-use console_client::{Closed, Served, TOKEN, Ws, get, without_wall_time};
+use console_client::{Closed, Served, TOKEN, Ws, get, replay, without_wall_time};
 use serde_json::{Value, json};
 use std::time::Duration;
 
@@ -110,4 +110,62 @@ fn hostile_clients_are_cut_off_alone_and_ten_watchers_leave_the_run_unchanged() 
     }
     let watched = without_wall_time(served.report());
     assert_eq!(watched, alone, "the watched run's report equals the run without clients");
+}
+
+#[test]
+fn a_replay_scrubs_through_the_logged_run() {
+    let mut served = Served::start("replayed", false, None);
+    let report = served.report();
+    let (_server, addr) = replay(&served.log());
+    let mut ws = Ws::connect(addr, &format!("/ws?token={TOKEN}")).unwrap();
+    let hello = ws.until(WAIT, is("hello"));
+    assert_eq!(hello["phase"]["phase"], "replay");
+    let (start, end) =
+        (hello["replay"]["start_ns"].as_u64().unwrap(), hello["replay"]["end_ns"].as_u64().unwrap());
+    assert!(end > start);
+    // At first the whole run: one truth per cycle (and the start), the final report.
+    let mut topics = std::collections::HashMap::new();
+    let mut truths = 0;
+    let mut logged_report = Value::Null;
+    loop {
+        let m = ws.recv().unwrap();
+        match m["type"].as_str() {
+            Some("channel") => {
+                topics.insert(m["id"].as_u64().unwrap(), m["topic"].as_str().unwrap().to_string());
+            }
+            Some("msg") => match topics[&m["ch"].as_u64().unwrap()].as_str() {
+                "/sim/truth" => truths += 1,
+                "/executive/report" => logged_report = m["data"].clone(),
+                _ => {}
+            },
+            Some("time") => {
+                assert_eq!(m["t_ns"].as_u64(), Some(end));
+                break;
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(truths, report["cycles"].as_u64().unwrap() + 1);
+    assert_eq!(logged_report, report);
+    // Halfway: a reset, then the path up to there only.
+    ws.send(&json!({"type": "seek", "t_ns": (start + end) / 2})).unwrap();
+    ws.until(WAIT, is("reset"));
+    let mut half = 0;
+    loop {
+        let m = ws.recv().unwrap();
+        if m["type"] == "time" {
+            break;
+        }
+        if m["type"] == "msg" && topics[&m["ch"].as_u64().unwrap()] == "/sim/truth" {
+            assert!(m["t"].as_u64().unwrap() <= (start + end) / 2);
+            half += 1;
+        }
+    }
+    assert!(half > 1 && half < truths, "{half} of {truths}");
+    // Playing moves the head forward; a command has no rover to go to.
+    ws.send(&json!({"type": "play", "speed": 1000.0})).unwrap();
+    let later = ws.until(WAIT, |m| m["type"] == "time" && m["t_ns"].as_u64() > Some((start + end) / 2));
+    assert_eq!(later["playing"], true);
+    ws.send(&json!({"type": "command", "line": "mission abort"})).unwrap();
+    assert!(ws.until(WAIT, is("error"))["text"].as_str().unwrap().contains("replay"));
 }

@@ -70,9 +70,6 @@ fn parse_speed(text: &str) -> Result<Speed, String> {
 
 /// Serves the console until Ctrl-C (or the mission's end with `--exit-when-done`).
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
-    if let Some(foxglove) = args.foxglove {
-        anyhow::bail!("--foxglove {foxglove}: the Foxglove server is not built into this rovernav yet");
-    }
     let token: Arc<str> = match &args.token_file {
         Some(file) => auth::read_token_file(file),
         None => auth::generate_token(),
@@ -95,9 +92,19 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     };
     let hub = Hub::new(rovernav_console::hub::DEFAULT_QUEUE);
     let (console, link) = Console::new(if replay.is_some() { Phase::Replay } else { Phase::Waiting });
+    let replay_log = replay.clone();
     let state = AppState::new(Arc::clone(&token), Arc::clone(&hub), console, replay);
     let server = Server::new().map_err(anyhow::Error::msg)?;
     let addr = server.serve(args.listen, router(state)).map_err(anyhow::Error::msg)?;
+    if let Some(foxglove) = args.foxglove {
+        let router = rovernav_console::foxglove::router(Arc::clone(&hub), Arc::clone(&token));
+        let bound = server.serve(foxglove, router).map_err(anyhow::Error::msg)?;
+        eprintln!("rovernav: Foxglove WebSocket server on ws://{bound}/?token=<the token>");
+        if let Some(log) = replay_log.clone() {
+            let (hub, speed) = (Arc::clone(&hub), args.speed.0);
+            std::thread::spawn(move || log.play_into(&hub, speed));
+        }
+    }
     let mut stdout = std::io::stdout().lock();
     writeln!(stdout, "http://{addr}/?token={token}")?;
     stdout.flush()?;

@@ -79,6 +79,11 @@ impl Served {
         serde_json::to_value(&output.report).unwrap()
     }
 
+    /// The run's telemetry log.
+    pub fn log(&self) -> PathBuf {
+        self.dir.join("telemetry.mcap")
+    }
+
     /// Connects a WebSocket client with the token.
     pub fn client(&self) -> Ws {
         Ws::connect(self.addr, &format!("/ws?token={TOKEN}")).unwrap()
@@ -89,6 +94,17 @@ impl Drop for Served {
     fn drop(&mut self) {
         std::fs::remove_dir_all(&self.dir).ok();
     }
+}
+
+/// A console replaying a log.
+pub fn replay(log: &std::path::Path) -> (Server, SocketAddr) {
+    let replay = rovernav_console::replay::ReplayLog::read(log).unwrap();
+    let (console, _link) = Console::new(Phase::Replay);
+    let state =
+        AppState::new(TOKEN.into(), Hub::new(DEFAULT_QUEUE), console, Some(std::sync::Arc::new(replay)));
+    let server = Server::new().unwrap();
+    let addr = server.serve("127.0.0.1:0".parse().unwrap(), router(state)).unwrap();
+    (server, addr)
 }
 
 /// The report without the fields that measure wall-clock time (as `cmp` of a run and its replay
