@@ -23,8 +23,9 @@ use std::time::{Duration, Instant};
 /// The bare loop on a world (navigator, simulator and localiser only): the time of its cycles
 /// and their number.
 fn direct_cycles(world: &World, mission: &Mission) -> (Duration, u64) {
-    let mut navigator =
-        rovernav_navigation::navigator_by_name(&mission.navigator, &world.rover).expect("registered");
+    // A map-matching localiser's navigator looks back over the terrain crossed, as in a run.
+    let name = rovernav_navigation::registry().decorated(&mission.navigator, &mission.localizer);
+    let mut navigator = rovernav_navigation::navigator_by_name(&name, &world.rover).expect("registered");
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
     let mut localizer = rovernav_navigation::localizer_by_name(&mission.localizer, &world.rover, initial)
         .expect("registered");
