@@ -24,6 +24,7 @@ import argparse
 import base64
 import json
 import os
+import struct
 import sys
 from collections import defaultdict
 
@@ -114,7 +115,7 @@ def main():
                 if errors:
                     fail(f"{topic}: {errors[0].message}")
             validated += 1
-    for topic in FOXGLOVE:
+    for topic in PER_CYCLE:
         if not messages[topic]:
             fail(f"{topic}: no messages")
 
@@ -145,17 +146,33 @@ def main():
         for t in sensing:
             if t not in times[topic]:
                 fail(f"{topic}: no grid after the range data at log time {t}")
-    grid = json.loads(messages["/map/belief"][-1][1])
-    cells = base64.b64decode(grid["data"])
-    if len(cells) != grid["row_stride"] * (len(cells) // max(grid["row_stride"], 1)) or not cells:
-        fail("/map/belief: data is not whole rows")
+    for topic in ["/map/belief", "/map/traversability"]:
+        for _, data in messages[topic]:
+            grid = json.loads(data)
+            cells = base64.b64decode(grid["data"])
+            if not cells or len(cells) % grid["row_stride"] or grid["row_stride"] != grid["column_count"] * grid["cell_stride"]:
+                fail(f"{topic}: {len(cells)} bytes are not whole rows of {grid['column_count']} cells")
+
+    images = 0
+    for topic, (name, _) in schemas.items():
+        if name != "foxglove.CompressedImage":
+            continue
+        for _, data in messages[topic]:
+            image = json.loads(data)
+            png = base64.b64decode(image["data"])
+            if image["format"] != "png" or png[:8] != b"\x89PNG\r\n\x1a\n" or png[12:16] != b"IHDR":
+                fail(f"{topic}: not a PNG")
+            width, height = struct.unpack(">II", png[16:24])
+            if width == 0 or height == 0:
+                fail(f"{topic}: a {width}x{height} PNG")
+            images += 1
 
     layout_topics = check_layout(args.layout, schemas) if args.layout else []
 
     print(
         f"check_mcap: ok: {args.log}: {size} bytes, {len(schemas)} channels with JSON schemas, "
         f"{validated} messages {'validated' if jsonschema else 'checked'}, {len(cycles)} cycles each with "
-        f"{', '.join(PER_CYCLE)}; grids after all {len(sensing)} sensing cycles"
+        f"{', '.join(PER_CYCLE)}; grids after all {len(sensing)} sensing cycles; {images} PNG images"
         + (f"; the layout's {len(layout_topics)} topics are in the log" if args.layout else "")
     )
 

@@ -12,7 +12,7 @@ use rovernav_bus::Record;
 use rovernav_bus::schema::titled_schema_of;
 use rovernav_core::{Point2, Pose3, PoseEstimate, SensorFrame};
 use rovernav_executive::messages::FrameSource;
-use rovernav_executive::messages::topics::PLATFORM_FRAME;
+use rovernav_executive::messages::topics::{CAMERA_IMAGE, PLATFORM_FRAME};
 use rovernav_executive::{CycleRecord, Report, RunObserver, RunSettings, Trace, World};
 use serde::Serialize;
 use std::collections::{BTreeMap, VecDeque};
@@ -24,7 +24,8 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Prefix under which every message of the component bus is logged as published (`/bus/platform/frame`),
-/// beside the curated topics above that replay reads.
+/// beside the curated topics above that replay reads; `/camera/image` excepted (the camera
+/// server's copies of the frames' images, which the log holds already).
 pub const BUS_PREFIX: &str = "/bus";
 
 /// The writer and the first error, shared with the flusher thread.
@@ -352,6 +353,11 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
 
     fn on_bus(&mut self, records: &[Record]) {
         for record in records {
+            // The camera server republishes the images of the platform's frames, which the log
+            // holds already (in `/bus/platform/frame`, and as PNG on `/camera/NAME`).
+            if record.topic == CAMERA_IMAGE.name() {
+                continue;
+            }
             let topic = format!("{BUS_PREFIX}{}", record.topic);
             let t = self.stamp(record.time_s);
             let bus_schemas = &self.bus_schemas;

@@ -10,6 +10,11 @@ use rovernav_core::CameraImage;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+/// The topic of a camera's images.
+pub fn camera_topic(camera: &str) -> String {
+    format!("/camera/{camera}")
+}
+
 /// `foxglove.CompressedImage`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct CompressedImageMsg {

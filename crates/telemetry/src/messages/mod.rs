@@ -66,14 +66,13 @@ pub type Pose2Msg = Pose2;
 /// A 3D pose.
 pub type Pose3Msg = Pose3;
 
-mod image;
 mod world;
 
-pub use image::{RawImageMsg, TimeMsg, camera_topic};
+pub use crate::foxglove::image::camera_topic;
 pub use world::{TerrainMsg, WorldMsg};
 
 /// Every curated topic with its schema name, derived schema and whether it carries simulation
-/// truth (camera topics are declared on first use with [`RawImageMsg`]'s schema).
+/// truth (camera topics are declared on first use with `foxglove.CompressedImage`'s schema).
 pub fn topic_table() -> Vec<(&'static str, &'static str, Value, bool)> {
     fn row<T: JsonSchema>(
         topic: &'static str,
