@@ -471,6 +471,8 @@ impl Deliberative {
                 Ok(true)
             }
             SleepAction::StayAsleep(until_s) => {
+                // Still standing by, even if the operator resumed the mission meanwhile.
+                self.control(bus, Some("navigator"), ControlAction::Standby)?;
                 bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s, sleep: true })?;
                 Ok(true)
             }
