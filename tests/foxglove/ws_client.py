@@ -22,6 +22,7 @@ import argparse
 import asyncio
 import json
 import os
+import shutil
 import struct
 import subprocess
 import socket
@@ -38,6 +39,8 @@ except ImportError:
     jsonschema = None
 
 SUBPROTOCOL = "foxglove.websocket.v1"
+# Files and folders this script made, removed at the end.
+TEMPORARY = []
 
 
 def fail(message):
@@ -170,6 +173,7 @@ def start_rovernav(binary, mission):
         "--listen", f"127.0.0.1:{console}", "--foxglove", f"127.0.0.1:{fox}",
         "--token-file", token_file.name, "--speed", "20", "--exit-when-done", "--out", out]
     server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    TEMPORARY.extend([token_file.name, out])
     deadline = time.time() + 60
     while time.time() < deadline:
         if server.poll() is not None:
@@ -213,6 +217,8 @@ def main():
         if server is not None:
             server.kill()
             server.wait()
+        for path in TEMPORARY:
+            shutil.rmtree(path, ignore_errors=True) if os.path.isdir(path) else os.remove(path)
 
 
 if __name__ == "__main__":
