@@ -310,6 +310,9 @@ impl<W: Write + Seek + Send + 'static> RunObserver for TelemetryRecorder<W> {
             }
         };
         self.put(topics::SENSOR_FRAME, t, &frame_msg);
+        if let Some(power) = &r.frame.power {
+            self.put(topics::POWER, t, power);
+        }
         self.put_images(t, r.frame);
         self.put(topics::ESTIMATE, t, &EstimateMsg::of(r.cycle, r.sim_time_s, r.estimate));
         let truth = TruthMsg {

@@ -104,6 +104,7 @@ fn every_message_fits_its_schema_every_topic_is_there_and_time_never_goes_back()
         assert_eq!(count(t), cycles + 1, "{t}: one per cycle and one at the start");
     }
     assert_eq!(count(topics::COMMAND), cycles);
+    assert_eq!(count(topics::POWER), cycles, "a power reading after every command");
     assert_eq!(count(topics::PLAN), out.trace.plans.len() as u64);
     assert_eq!(count(topics::HAZARD_CONTACTS), out.report.hazard_events.len() as u64);
     assert_eq!(last_time, (out.report.sim_time_s * 1e9).round() as u64);

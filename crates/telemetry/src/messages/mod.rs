@@ -43,8 +43,10 @@ pub mod topics {
     pub const OVERLAYS: &str = "/navigation/overlays";
     /// Each instrument placement, as the tooling arm published it on the bus (AutoPlace).
     pub const ARM_PLACEMENT: &str = "/bus/arm/placement";
+    /// The power system's reading after each command (battery, panel, loads).
+    pub const POWER: &str = "/power";
     /// Every topic a run logs, in the order they are first written.
-    pub const ALL: [&str; 11] = [
+    pub const ALL: [&str; 12] = [
         WORLD,
         SETTINGS,
         SENSOR_FRAME,
@@ -56,6 +58,7 @@ pub mod topics {
         HAZARD_CONTACTS,
         OVERLAYS,
         REPORT,
+        POWER,
     ];
 }
 
@@ -93,6 +96,7 @@ pub fn topic_table() -> Vec<(&'static str, &'static str, Value, bool)> {
         row::<HazardContactMsg>(topics::HAZARD_CONTACTS, "rovernav.HazardContact", true),
         row::<OverlaysMsg>(topics::OVERLAYS, "rovernav.Overlays", false),
         row::<Report>(topics::REPORT, "rovernav.Report", false),
+        row::<rovernav_core::PowerReading>(topics::POWER, "rovernav.Power", false),
     ]
 }
 
