@@ -31,7 +31,7 @@ pub struct LiveRun {
 }
 
 /// Paces simulated time against the wall clock.
-struct Pacer {
+pub struct Pacer {
     speed: f64,
     /// A wall-clock instant and the simulated time it stands for.
     anchor: (Instant, f64),
@@ -42,8 +42,13 @@ struct Pacer {
 const PACE_SLACK: Duration = Duration::from_millis(250);
 
 impl Pacer {
+    /// Pacing `speed` simulated seconds per wall-clock second from now, at simulated time 0.
+    pub fn new(speed: f64) -> Self {
+        Self { speed, anchor: (Instant::now(), 0.0) }
+    }
+
     /// Sleeps until the wall clock reaches simulated time `t`.
-    fn pace(&mut self, t: f64) {
+    pub fn pace(&mut self, t: f64) {
         let (wall, sim) = self.anchor;
         let due = wall + Duration::from_secs_f64(((t - sim) / self.speed).clamp(0.0, 1e6));
         let now = Instant::now();
@@ -125,7 +130,7 @@ fn run_inner(config: &LiveRun, hub: &Arc<Hub>, link: &mut ConsoleLink) -> Result
     let mut recorder =
         TelemetryRecorder::create_with_tee(&config.log, hub.sink()).map_err(|e| e.to_string())?;
     link.console().set_phase(Phase::Running);
-    let mut pacer = config.speed.map(|speed| Pacer { speed, anchor: (Instant::now(), 0.0) });
+    let mut pacer = config.speed.map(Pacer::new);
     let mut pace = |p: &Progress| {
         if let Some(pacer) = pacer.as_mut() {
             pacer.pace(p.sim_time_s);

@@ -116,6 +116,18 @@ impl Peer {
         }
     }
 
+    /// Forwards one hub event (a skip is reported as `lagged`).
+    async fn event(&mut self, event: Result<Event, RecvError>) -> Result<(), ()> {
+        match event {
+            Ok(Event::Channel(c)) => self.channel(&c).await,
+            Ok(Event::Message(m)) => self.message(&m).await,
+            Err(RecvError::Lagged(skipped)) => {
+                self.send(json!({"type": "lagged", "skipped": skipped}).to_string()).await
+            }
+            Err(RecvError::Closed) => Ok(()),
+        }
+    }
+
     /// Sends a close frame, then reads (and drops) what the client still sends until it closes
     /// too or a second has passed: closing a socket with unread data would reset the connection
     /// and could lose the close frame that says why.
@@ -226,13 +238,19 @@ async fn serve_live(
     loop {
         let sent = tokio::select! {
             event = events.recv() => match event {
-                Ok(Event::Channel(c)) => peer.channel(&c).await,
-                Ok(Event::Message(m)) => peer.message(&m).await,
-                Err(RecvError::Lagged(skipped)) => peer.send(json!({"type": "lagged", "skipped": skipped}).to_string()).await,
                 Err(RecvError::Closed) => return None,
+                event => peer.event(event).await,
             },
             notice = notices.recv() => match notice {
-                Ok(n) => match notice_json(&n, id) { Some(text) => peer.send(text).await, None => Ok(()) },
+                Ok(n) => {
+                    if matches!(n, Notice::Phase(_)) {
+                        // The run's last messages before the news that it ended.
+                        while let Ok(event) = events.try_recv() {
+                            peer.event(Ok(event)).await.ok()?;
+                        }
+                    }
+                    match notice_json(&n, id) { Some(text) => peer.send(text).await, None => Ok(()) }
+                }
                 Err(RecvError::Lagged(_)) => Ok(()),
                 Err(RecvError::Closed) => return None,
             },
