@@ -104,7 +104,10 @@ mod tests {
     fn a_campaign_line_gives_the_runs_done_and_the_time_left_at_the_mean_rate() {
         // 25 runs in 100 s: 75 more take 300 s.
         let line = campaign_line("c", 25, 100, 100.0, "trial 24 astar-grid: reached");
-        assert_eq!(line, "campaign c: 25/100 runs · 1m40s elapsed · ETA 5m00s · trial 24 astar-grid: reached");
+        assert_eq!(
+            line,
+            "campaign c: 25/100 runs · 1m40s elapsed · ETA 5m00s · trial 24 astar-grid: reached"
+        );
         assert!(campaign_line("c", 0, 4, 3.0, "").contains("ETA --"));
     }
 
