@@ -7,9 +7,10 @@
 //! the autonomy's belief (no truth goes in); for `astar-grid` it is the navigator's own map,
 //! for the other navigators the stack's shared terrain model of what they sensed.
 //!
-//! Departure: the grids are published at twice the map's cell size (the lowest height and
-//! traversability of each 2 x 2 block, i.e. the worst) and cropped to the sensed area, to keep
-//! the log small; the planner's own resolution is in the navigator's parameters.
+//! Departures: an extent of more than [`MAX_CELLS`] cells gets coarser cells (memory); the
+//! grids are published at twice the map's cell size (of each 2 x 2 block the highest height
+//! and the lowest traversability and goodness: the worst) and cropped to the sensed area, to
+//! keep the log small; the planner's own resolution is in the navigator's parameters.
 
 use super::{PoseMsg, TimeMsg};
 use crate::base64;
@@ -82,6 +83,9 @@ impl GridMsg {
     }
 }
 
+/// Most cells of the rebuilt map (16 million: about 0.4 km square at the navigators' 0.1 m).
+pub const MAX_CELLS: f64 = 16e6;
+
 /// The belief map a run's frames build (see the module documentation).
 pub struct BeliefMap {
     model: TerrainModel,
@@ -93,13 +97,15 @@ impl BeliefMap {
     /// An empty map over the extent a grid navigator would use for this world.
     pub fn new(world: &World) -> Self {
         let config = GridNavigatorConfig::default();
-        let (m, res) = (config.map_margin, config.map_resolution);
+        let m = config.map_margin;
         let mut points = vec![world.start.position(), world.goal.position];
         points.extend(world.goal.waypoints.iter().copied());
         let x0 = points.iter().map(|p| p.x).fold(f64::INFINITY, f64::min) - m;
         let y0 = points.iter().map(|p| p.y).fold(f64::INFINITY, f64::min) - m;
         let x1 = points.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max) + m;
         let y1 = points.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max) + m;
+        // A long traverse gets coarser cells rather than more than MAX_CELLS of them.
+        let res = config.map_resolution.max(((x1 - x0) * (y1 - y0) / MAX_CELLS).sqrt());
         let cols = ((x1 - x0) / res).ceil().clamp(1.0, 20_000.0) as usize;
         let rows = ((y1 - y0) / res).ceil().clamp(1.0, 20_000.0) as usize;
         let geometry = GridGeometry { cols, rows, resolution: res, origin_x: x0, origin_y: y0 };
@@ -255,5 +261,19 @@ mod tests {
         }
         assert_eq!(trav.cell_stride, 5);
         assert_eq!(trav.bytes().unwrap().len(), heights.len() * 5);
+    }
+
+    #[test]
+    fn a_long_traverse_gets_coarser_cells_not_more_of_them() {
+        let mut world = rovernav_executive::long_yard_world(1, 5.0, 4.0, 1.0);
+        let near = BeliefMap::new(&world).model().world().geometry();
+        assert_eq!(near.resolution, GridNavigatorConfig::default().map_resolution);
+        world.goal.position = rovernav_core::Point2::new(3000.0, 2000.0);
+        let far = BeliefMap::new(&world).model().world().geometry();
+        assert!((far.cols * far.rows) as f64 <= MAX_CELLS * 1.01, "{} x {}", far.cols, far.rows);
+        assert!(
+            far.width_m() >= 3000.0 && far.height_m() >= 2000.0,
+            "the extent still covers start and goal"
+        );
     }
 }
