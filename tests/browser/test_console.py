@@ -32,6 +32,7 @@ FLAGS = ("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
 START = (5.0, 5.0)  # the default mission's start
 WAYPOINT = (8.0, 9.0)
 GOAL = (12.0, 13.0)
+KEEP_OUT = [(16.0, 4.0), (19.0, 4.0), (17.5, 7.0)]  # off the way, so the run is unchanged by it
 
 
 def browser(user_dir):
@@ -125,11 +126,17 @@ class ConsoleInABrowser(unittest.TestCase):
         draft = self.js("rovernav.draft")
         self.assertEqual(len(draft["waypoints"]), 1)
         self.assertLess(math.dist((draft["goal"]["x"], draft["goal"]["y"]), GOAL), 0.15, draft)
+        self.commander.find_element(By.CSS_SELECTOR, 'input[value="keepout"]').click()
+        for vertex in KEEP_OUT:
+            self.click_world(*vertex)
+        self.commander.find_element(By.ID, "closezone").click()
         self.commander.find_element(By.ID, "send").click()
         wait("the mission to run", lambda: self.js("rovernav.state.phase") == "running")
         goal = self.js("rovernav.map.world.goal")
         self.assertLess(math.dist((goal["position"]["x"], goal["position"]["y"]), GOAL), 0.15, goal)
         self.assertEqual(len(goal["waypoints"]), 1)
+        self.assertEqual(len(goal["keep_out"]), 1, "the drawn keep-out zone is the mission's")
+        self.assertLess(math.dist((goal["keep_out"][0][0]["x"], goal["keep_out"][0][0]["y"]), KEEP_OUT[0]), 0.15)
         first = wait("the rover's pose", lambda: self.js("rovernav.state.rover"))
         wait("the rover icon to move", lambda: math.dist(
             (first["x"], first["y"]), (lambda p: (p["x"], p["y"]))(self.js("rovernav.state.rover"))) > 1.0)
@@ -159,7 +166,20 @@ class ConsoleInABrowser(unittest.TestCase):
         self.assertEqual(self.js("rovernav.state.phase", w), "running", "the watcher's abort did nothing")
         self.assertFalse([t for t in self.log_texts() if t.startswith("mission aborted")])
 
-    def test_6_the_report_has_the_clicked_goal(self):
+    def test_6_manual_driving_while_paused(self):
+        def press(key):
+            self.commander.find_element(By.ID, key).click()
+
+        press("pause")
+        wait("the pause", lambda: [t for t in self.log_texts() if t.startswith("mission paused")])
+        self.commander.find_element(By.CSS_SELECTOR, '#pad button[data-cmd="turn 45"]').click()
+        answer = wait("the turn's answer", lambda: [t for t in self.log_texts() if t.startswith("`turn") and "completed" in t])
+        press("resume")
+        turned = float(answer[0].split("completed: ")[1].split(" deg")[0])
+        self.assertAlmostEqual(turned, 45.0, delta=5.0, msg=answer[0])
+        wait("the resumed mission", lambda: [t for t in self.log_texts() if t.startswith("mission resumed")])
+
+    def test_7_the_report_has_the_clicked_goal(self):
         state = wait("the mission's end", lambda: self.js("rovernav.state.phase") == "done", timeout=240)
         self.assertTrue(state)
         os.makedirs(os.path.join(ROOT, "docs", "images"), exist_ok=True)
