@@ -182,3 +182,46 @@ fn sr2_dead_reckoning_loop_closes_within_two_percent() {
     assert_eq!(r.outcome, "reached", "{}", r.message);
     assert!(r.localization_error_m < 0.02 * r.distance_driven_m, "{}", summary(&r));
 }
+
+/// The simulation's memory is bounded by the rover's surroundings, not the distance driven:
+/// 9 km more of straight driving on gentle tiled ground (window re-filled about 600 times) adds
+/// under 16 MB to the process's peak resident memory after the first kilometre.
+#[test]
+#[ignore = "release speed: 10 km of driving"]
+fn tiled_simulation_memory_does_not_grow_with_distance() {
+    let mut mission = short_traverse(80.0);
+    let TerrainSpec::Tiled(spec) = &mut mission.terrain else { panic!("tiled") };
+    (spec.relief_m, spec.ridge_m, spec.craters_per_hectare) = (1.0, 0.0, 0.0);
+    mission.start.yaw_deg = 0.0;
+    let world = build_world(&mission, "test").unwrap();
+    let source = tiled_source(&mission).unwrap();
+    let mut sim = rovernav_sim::Simulator::new(
+        world.terrain.clone(),
+        world.rover.clone(),
+        world.sensor_model.clone(),
+        world.start,
+        1,
+    )
+    .with_window(source.window());
+    let start = sim.truth();
+    let mut drive = |metres: f64| {
+        let wall = std::time::Instant::now();
+        for _ in 0..(metres / 10.0) as usize {
+            let frame = sim.execute(&rovernav_core::NavCommand::Drive {
+                distance: 10.0,
+                curvature: 0.0,
+                guard: Default::default(),
+            });
+            assert!(frame.motion_stopped.is_none(), "{:?} at {:?}", frame.motion_stopped, sim.truth());
+        }
+        let rss = rovernav_executive::report::peak_rss_mb().unwrap_or(0.0);
+        (rss, wall.elapsed().as_secs_f64(), sim.truth().x - start.x)
+    };
+    let (one_km, wall_1, x_1) = drive(1000.0);
+    let (ten_km, wall_10, x_10) = drive(9000.0);
+    eprintln!(
+        "peak RSS {one_km} MB after {x_1:.0} m ({wall_1:.1} s), {ten_km} MB after {x_10:.0} m ({wall_10:.1} s more)"
+    );
+    assert!(x_10 > 9000.0, "{x_10}");
+    assert!(ten_km - one_km < 16.0, "{one_km} -> {ten_km} MB");
+}
