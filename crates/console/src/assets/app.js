@@ -218,6 +218,11 @@ function frame() {
   requestAnimationFrame(frame);
 }
 drawCompass(el("compass"), null);
+(() => {
+  const c = el("camera").getContext("2d");
+  c.fillStyle = "#777"; c.font = "14px sans-serif";
+  c.fillText("no camera image yet", 20, 30);
+})();
 window.rovernav = { state, map, log, draft, send };
 connect();
 requestAnimationFrame(frame);
