@@ -153,11 +153,19 @@ impl BeliefMap {
             }
         }
         let (x, y) = (g.origin_x + c0 as f64 * g.resolution, g.origin_y + r0 as f64 * g.resolution);
+        // The grids lie at the lowest known height, under the terrain they describe (a DEM's
+        // heights may be far from zero).
+        let lowest = elevation
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .filter(|h| h.is_finite())
+            .fold(f32::INFINITY, f32::min);
+        let z = if lowest.is_finite() { f64::from(lowest) } else { 0.0 };
         let cell = g.resolution * k as f64;
         let grid = |fields: Vec<PackedElementField>, stride: u32, data: &[u8]| GridMsg {
             timestamp: TimeMsg::of_seconds(t),
             frame_id: frame_id.into(),
-            pose: PoseMsg::at(x, y, 0.0),
+            pose: PoseMsg::at(x, y, z),
             column_count: cols as u32,
             cell_size: Vector2 { x: cell, y: cell },
             row_stride: cols as u32 * stride,
@@ -259,6 +267,7 @@ mod tests {
                 assert!((1.6..=3.4).contains(&ahead), "cell {i} {ahead} m ahead");
             }
         }
+        assert_eq!(elevation.pose.position.z, f64::from(known.iter().copied().fold(f32::INFINITY, f32::min)));
         assert_eq!(trav.cell_stride, 5);
         assert_eq!(trav.bytes().unwrap().len(), heights.len() * 5);
     }
