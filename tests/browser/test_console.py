@@ -118,22 +118,34 @@ class ConsoleInABrowser(unittest.TestCase):
         ActionChains(self.commander).move_to_element_with_offset(
             canvas, cx - rect["width"] / 2, cy - rect["height"] / 2).click().perform()
 
+    def clear_of_rocks(self, x, y):
+        """The point nearest (x, y) at least 1 m clear of every rock (from the world message)."""
+        return self.js(f"""(() => {{
+            const rocks = rovernav.map.world.terrain.rocks || [];
+            const clear = (px, py) => rocks.every((r) => Math.hypot(r.x - px, r.y - py) - r.diameter / 2 > 1.0);
+            for (let d = 0; d <= 4; d += 0.25)
+              for (let a = 0; a < 2 * Math.PI; a += d > 0 ? 0.25 / d : 7)
+                if (clear({x} + d * Math.cos(a), {y} + d * Math.sin(a))) return [{x} + d * Math.cos(a), {y} + d * Math.sin(a)];
+            return [{x}, {y}]; }})()""")
+
     def test_3_a_clicked_plan_starts_the_mission_and_the_rover_moves(self):
+        waypoint, goal_at = self.clear_of_rocks(*WAYPOINT), self.clear_of_rocks(*GOAL)
         self.commander.find_element(By.CSS_SELECTOR, 'input[value="waypoint"]').click()
-        self.click_world(*WAYPOINT)
+        self.click_world(*waypoint)
         self.commander.find_element(By.CSS_SELECTOR, 'input[value="goal"]').click()
-        self.click_world(*GOAL)
+        self.click_world(*goal_at)
         draft = self.js("rovernav.draft")
         self.assertEqual(len(draft["waypoints"]), 1)
-        self.assertLess(math.dist((draft["goal"]["x"], draft["goal"]["y"]), GOAL), 0.15, draft)
+        self.assertLess(math.dist((draft["goal"]["x"], draft["goal"]["y"]), goal_at), 0.15, draft)
         self.commander.find_element(By.CSS_SELECTOR, 'input[value="keepout"]').click()
         for vertex in KEEP_OUT:
             self.click_world(*vertex)
         self.commander.find_element(By.ID, "closezone").click()
         self.commander.find_element(By.ID, "send").click()
         wait("the mission to run", lambda: self.js("rovernav.state.phase") == "running")
-        goal = self.js("rovernav.map.world.goal")
-        self.assertLess(math.dist((goal["position"]["x"], goal["position"]["y"]), GOAL), 0.15, goal)
+        # The run's world (logged at its start) has the plan in it.
+        goal = wait("the run's world", lambda: (lambda g: g if math.dist(
+            (g["position"]["x"], g["position"]["y"]), goal_at) < 0.15 else None)(self.js("rovernav.map.world.goal")))
         self.assertEqual(len(goal["waypoints"]), 1)
         self.assertEqual(len(goal["keep_out"]), 1, "the drawn keep-out zone is the mission's")
         self.assertLess(math.dist((goal["keep_out"][0][0]["x"], goal["keep_out"][0][0]["y"]), KEEP_OUT[0]), 0.15)
@@ -173,7 +185,9 @@ class ConsoleInABrowser(unittest.TestCase):
         press("pause")
         wait("the pause", lambda: [t for t in self.log_texts() if t.startswith("mission paused")])
         self.commander.find_element(By.CSS_SELECTOR, '#pad button[data-cmd="turn 45"]').click()
-        answer = wait("the turn's answer", lambda: [t for t in self.log_texts() if t.startswith("`turn") and "completed" in t])
+        answer = wait("the turn's answer", lambda: [t for t in self.log_texts() if t.startswith("`turn 45") and "completed" in t])
+        self.commander.find_element(By.CSS_SELECTOR, '#pad button[data-cmd="turn -45"]').click()
+        wait("the turn back", lambda: [t for t in self.log_texts() if t.startswith("`turn -45") and "completed" in t])
         press("resume")
         turned = float(answer[0].split("completed: ")[1].split(" deg")[0])
         self.assertAlmostEqual(turned, 45.0, delta=5.0, msg=answer[0])
