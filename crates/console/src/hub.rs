@@ -23,7 +23,7 @@ pub struct Channel {
     pub id: u32,
     /// The topic (`/rover/estimate`).
     pub topic: String,
-    /// The schema's name (`foxglove.RawImage`, `rovernav.Estimate`).
+    /// The schema's name (`foxglove.CompressedImage`, `rovernav.Estimate`).
     pub schema_name: String,
     /// The JSON Schema of its messages.
     pub schema: Value,

@@ -1,14 +1,13 @@
 //! `rovernav serve --replay LOG.mcap`: a finished run's log served to the same panels, which
 //! scrub through it (each client has its own play head).
 //!
-//! The log is read once, linearly, with a bound on every record's length (a corrupt length must
-//! not make the reader allocate without limit; the telemetry reader's rule), so a log cut short
-//! by a killed run replays up to its last complete chunk.
+//! The log is read once, linearly, with a bound on every record's length (the telemetry crate's
+//! `bounded_messages`: a corrupt length must not make the reader allocate without limit), so a
+//! log cut short by a killed run replays up to its last complete chunk.
 
 use crate::hub::{Channel, Hub, Message};
 use crate::server_history::CUMULATIVE;
 use rovernav_telemetry::mcap;
-use rovernav_telemetry::mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -38,31 +37,16 @@ impl ReplayLog {
         if !bytes.starts_with(mcap::MAGIC) {
             return Err("not an MCAP log (no MCAP magic at the start)".into());
         }
-        let ceiling = usize::try_from(rovernav_core::limits::max_alloc_bytes()).unwrap_or(usize::MAX);
-        let limit = bytes.len().saturating_mul(64).max(64 << 20).min(ceiling);
-        let mut reader =
-            MessageReader::new_with_options(LinearReaderOptions::default().with_record_length_limit(limit));
-        let mut rest = bytes;
         let mut log =
             Self { channels: Vec::new(), messages: Vec::new(), truncated: None, cumulative: Vec::new() };
         let mut ids: HashMap<String, u32> = HashMap::new();
-        loop {
-            let event = match reader.next_event() {
-                None => break,
-                Some(Ok(event)) => event,
-                Some(Err(e)) => {
+        for item in rovernav_telemetry::bounded_messages(bytes) {
+            match item {
+                Err(e) => {
                     log.truncated = Some(e.to_string());
                     break;
                 }
-            };
-            match event {
-                MessageReadEvent::ReadRequest(need) => {
-                    let n = need.min(rest.len());
-                    reader.insert(n).copy_from_slice(&rest[..n]);
-                    reader.notify_read(n);
-                    rest = &rest[n..];
-                }
-                MessageReadEvent::Message(m) => {
+                Ok(m) => {
                     let topic = &m.channel.topic;
                     let channel = match ids.get(topic) {
                         Some(&id) => id,

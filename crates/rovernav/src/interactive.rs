@@ -20,7 +20,7 @@ use crate::RunArgs;
 use rovernav_executive::{OperatorLink, Run};
 use std::io::{BufRead, Write};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// How long a waiting mission waits for a line per cycle (wall clock).
 const WAIT_FOR_INPUT: Duration = Duration::from_millis(100);
@@ -100,38 +100,6 @@ impl OperatorLink for StdinLink {
     }
 }
 
-/// Paces simulated time against the wall clock.
-struct Pacer {
-    /// Simulated seconds per wall-clock second.
-    speed: f64,
-    /// A wall-clock instant and the simulated time it stands for.
-    anchor: (Instant, f64),
-}
-
-/// How far the wall clock may run ahead of paced simulated time (waiting for input, slow
-/// computing) before pacing starts again from now rather than letting the simulation catch up
-/// in a burst.
-const PACE_SLACK: Duration = Duration::from_millis(250);
-
-impl Pacer {
-    /// Pacing from now, at simulated time 0.
-    fn new(speed: f64) -> Self {
-        Self { speed, anchor: (Instant::now(), 0.0) }
-    }
-
-    /// Sleeps until the wall clock reaches simulated time `t`.
-    fn pace(&mut self, t: f64) {
-        let (wall, sim) = self.anchor;
-        let due = wall + Duration::from_secs_f64(((t - sim) / self.speed).clamp(0.0, 1e6));
-        let now = Instant::now();
-        if now > due + PACE_SLACK {
-            self.anchor = (now, t);
-        } else if due > now {
-            std::thread::sleep(due - now);
-        }
-    }
-}
-
 /// Parses `--speed`: a finite number of simulated seconds per second above zero.
 pub fn parse_speed(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
@@ -165,7 +133,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     // The world first: a mission that cannot be built leaves no telemetry.mcap.
     let run = Run::mission(&mission, &origin_of_navigator)?;
     let mut log = crate::output::RunLog::open(&out_dir)?;
-    let mut pacer = speed.map(Pacer::new);
+    let mut pacer = speed.map(rovernav_console::live::Pacer::new);
     let mut pace = |p: &rovernav_executive::Progress| {
         if let Some(pacer) = pacer.as_mut() {
             pacer.pace(p.sim_time_s);

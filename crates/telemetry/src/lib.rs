@@ -28,7 +28,7 @@ pub mod writer;
 /// reader (the tests read logs with it, independently of [`read_log`]).
 pub use mcap;
 pub use messages::topic_table;
-pub use reader::{LogEnd, LoggedRun, ReplayedRun, parse_log, read_log};
+pub use reader::{LogEnd, LoggedRun, ReplayedRun, bounded_messages, parse_log, read_log};
 pub use recorder::TelemetryRecorder;
 /// The derived JSON Schemas and their checker (the bus crate's, shared by the log).
 pub use rovernav_bus::schema;

@@ -150,7 +150,7 @@ const BUS_FRAME: &str = "/bus/platform/frame";
 /// least: a chunk decompresses to more than it takes) and within the memory ceiling
 /// (`rovernav_core::limits`): `mcap::MessageStream` applies no limit inside chunks, so a corrupt
 /// record length there made it try to allocate petabytes (found by tests/fuzz_log.rs).
-fn bounded_messages(
+pub fn bounded_messages(
     bytes: &[u8],
 ) -> impl Iterator<Item = Result<mcap::Message<'static>, mcap::McapError>> + '_ {
     use mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
