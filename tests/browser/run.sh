@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The operator console's browser tests: Debian's chromium + chromium-driver and Python selenium
 # (installed quietly when missing), against the release binary (ROVERNAV_BIN, default
-# $CARGO_TARGET_DIR/release/rovernav). Saves docs/images/console.png.
+# $CARGO_TARGET_DIR/release/rovernav). ROVERNAV_SCREENSHOT=docs/images/console.png refreshes the README's screenshot.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then

@@ -5,7 +5,8 @@ one talk to it: the page refuses without the token, draws the map, plans a missi
 watches the rover move, answers `status` in its log, and the watcher cannot command. The run's
 report.json then shows the clicked goal (its straight-line distance from the start).
 
-Run by tests/browser/run.sh (ROVERNAV_BIN names the binary); saves docs/images/console.png.
+Run by tests/browser/run.sh (ROVERNAV_BIN names the binary); ROVERNAV_SCREENSHOT=PATH saves the
+finished console's screenshot there (docs/images/console.png is the README's).
 """
 
 import json
@@ -196,8 +197,11 @@ class ConsoleInABrowser(unittest.TestCase):
     def test_7_the_report_has_the_clicked_goal(self):
         state = wait("the mission's end", lambda: self.js("rovernav.state.phase") == "done", timeout=240)
         self.assertTrue(state)
-        os.makedirs(os.path.join(ROOT, "docs", "images"), exist_ok=True)
-        self.commander.save_screenshot(os.path.join(ROOT, "docs", "images", "console.png"))
+        # The screenshot goes beside the run's outputs; ROVERNAV_SCREENSHOT=docs/images/console.png
+        # refreshes the README's picture.
+        shot = os.environ.get("ROVERNAV_SCREENSHOT") or os.path.join(self.tmp, "console.png")
+        os.makedirs(os.path.dirname(os.path.abspath(shot)), exist_ok=True)
+        self.commander.save_screenshot(shot)
         self.server.wait(60)
         with open(os.path.join(self.out, "report.json")) as f:
             report = json.load(f)
