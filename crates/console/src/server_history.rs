@@ -5,6 +5,11 @@
 //! cumulative topics and the latest of the others; [`LiveHistory`] fills one from the hub on its
 //! own thread and passes each event on to the clients under the same lock, so that a client that
 //! joins gets the history and then exactly the events after it.
+//!
+//! The kept messages are bounded in bytes ([`HISTORY_BUDGET_BYTES`]): past the budget, the topic
+//! holding the most bytes (the sensor frames, on a long run) is thinned to every other message,
+//! keeping its first and last, so a late joiner of a long traverse sees the whole route at a
+//! coarser step rather than the server's memory growing with the distance driven.
 
 use crate::hub::{Channel, Event, Hub, Message};
 use std::collections::HashMap;
@@ -34,18 +39,81 @@ pub fn shown(topic: &str) -> bool {
     !topic.starts_with("/bus/") || SHOWN_BUS_TOPICS.contains(&topic)
 }
 
-/// Channels and the messages a client needs to show the run up to now.
+/// At most this many bytes of cumulative messages are kept for late joiners.
+pub const HISTORY_BUDGET_BYTES: usize = 256 << 20;
+
+/// A cumulative topic's thinning: of its messages in arrival order, those whose number is a
+/// multiple of `stride` are kept, and the newest besides.
 #[derive(Debug, Default)]
+struct Thinning {
+    arrivals: u64,
+    stride: u64,
+    newest: Option<(u64, Arc<Message>)>,
+}
+
+/// Channels and the messages a client needs to show the run up to now.
+#[derive(Debug)]
 pub struct History {
     /// Every topic so far.
     pub channels: Vec<Arc<Channel>>,
     cumulative: Vec<bool>,
-    kept: Vec<(u64, Arc<Message>)>,
+    /// Kept cumulative messages: (sequence, arrival number in its topic, message).
+    kept: Vec<(u64, u64, Arc<Message>)>,
+    kept_bytes: usize,
+    budget_bytes: usize,
+    thinning: HashMap<u32, Thinning>,
     latest: HashMap<u32, (u64, Arc<Message>)>,
     seq: u64,
 }
 
+impl Default for History {
+    fn default() -> Self {
+        Self::with_budget(HISTORY_BUDGET_BYTES)
+    }
+}
+
 impl History {
+    /// An empty history keeping at most `budget_bytes` of cumulative messages.
+    pub fn with_budget(budget_bytes: usize) -> Self {
+        Self {
+            channels: Vec::new(),
+            cumulative: Vec::new(),
+            kept: Vec::new(),
+            kept_bytes: 0,
+            budget_bytes,
+            thinning: HashMap::new(),
+            latest: HashMap::new(),
+            seq: 0,
+        }
+    }
+
+    /// Bytes of the cumulative messages kept.
+    pub fn kept_bytes(&self) -> usize {
+        self.kept_bytes
+    }
+
+    /// Doubles the stride of the topic holding the most bytes (every other kept message of it
+    /// goes); returns whether anything was dropped.
+    fn thin(&mut self) -> bool {
+        let mut bytes: HashMap<u32, (usize, usize)> = HashMap::new();
+        for (_, _, m) in &self.kept {
+            let entry = bytes.entry(m.channel).or_default();
+            entry.0 += m.json.len();
+            entry.1 += 1;
+        }
+        let heaviest = bytes.iter().max_by_key(|(id, (b, _))| (*b, std::cmp::Reverse(**id)));
+        let Some((&channel, &(_, count))) = heaviest else { return false };
+        if count < 2 {
+            return false;
+        }
+        let thinning = self.thinning.entry(channel).or_default();
+        thinning.stride = thinning.stride.max(1) * 2;
+        let stride = thinning.stride;
+        self.kept.retain(|(_, number, m)| m.channel != channel || number.is_multiple_of(stride));
+        self.kept_bytes = self.kept.iter().map(|(_, _, m)| m.json.len()).sum();
+        true
+    }
+
     /// Adds a topic.
     pub fn channel(&mut self, c: Arc<Channel>) {
         let index = c.id as usize - 1;
@@ -64,7 +132,17 @@ impl History {
         }
         self.seq += 1;
         if self.cumulative.get(m.channel as usize - 1).copied().unwrap_or(false) {
-            self.kept.push((self.seq, m));
+            let thinning = self.thinning.entry(m.channel).or_default();
+            let number = thinning.arrivals;
+            thinning.arrivals += 1;
+            if !number.is_multiple_of(thinning.stride.max(1)) {
+                thinning.newest = Some((self.seq, m));
+                return;
+            }
+            thinning.newest = None;
+            self.kept_bytes += m.json.len();
+            self.kept.push((self.seq, number, m));
+            while self.kept_bytes > self.budget_bytes && self.thin() {}
         } else {
             self.latest.insert(m.channel, (self.seq, m));
         }
@@ -72,7 +150,10 @@ impl History {
 
     /// The messages kept, in the order they came.
     pub fn messages(&self) -> Vec<Arc<Message>> {
-        let mut all: Vec<&(u64, Arc<Message>)> = self.kept.iter().chain(self.latest.values()).collect();
+        let kept = self.kept.iter().map(|(seq, _, m)| (*seq, m));
+        let newest = self.thinning.values().filter_map(|t| t.newest.as_ref().map(|(seq, m)| (*seq, m)));
+        let latest = self.latest.values().map(|(seq, m)| (*seq, m));
+        let mut all: Vec<(u64, &Arc<Message>)> = kept.chain(newest).chain(latest).collect();
         all.sort_by_key(|(seq, _)| *seq);
         all.into_iter().map(|(_, m)| Arc::clone(m)).collect()
     }
@@ -160,5 +241,40 @@ mod tests {
         hub.publish("/sim/truth", 9, b"{}");
         let next = rest.blocking_recv().unwrap();
         assert!(matches!(next, Event::Message(m) if m.time_ns == 9));
+    }
+
+    #[test]
+    fn a_long_run_is_thinned_within_the_budget_keeping_the_route_ends_and_the_small_topics() {
+        let mut history = History::with_budget(100_000);
+        history.channel(Arc::new(Channel {
+            id: 1,
+            topic: "/bus/platform/frame".into(),
+            schema_name: "F".into(),
+            schema: json!({}),
+        }));
+        history.channel(Arc::new(Channel {
+            id: 2,
+            topic: "/log".into(),
+            schema_name: "L".into(),
+            schema: json!({}),
+        }));
+        let frame: Arc<[u8]> = Arc::from(vec![b' '; 1000]);
+        for t in 0..10_000u64 {
+            history.message(Arc::new(Message { channel: 1, time_ns: t, json: Arc::clone(&frame) }));
+            if t % 100 == 0 {
+                history.message(Arc::new(Message { channel: 2, time_ns: t, json: Arc::from(&b"{}"[..]) }));
+            }
+        }
+        assert!(history.kept_bytes() <= 100_000, "{} bytes kept", history.kept_bytes());
+        let frames: Vec<u64> =
+            history.messages().iter().filter(|m| m.channel == 1).map(|m| m.time_ns).collect();
+        assert_eq!((frames[0], *frames.last().unwrap()), (0, 9_999), "the route's ends are kept");
+        assert!(frames.len() > 25, "the route is kept at a coarser step: {} frames", frames.len());
+        let steps: Vec<u64> = frames.windows(2).map(|w| w[1] - w[0]).collect();
+        let widest = *steps.iter().max().unwrap();
+        let mean = 9_999 / (frames.len() as u64 - 1);
+        assert!(widest <= 2 * mean, "thinned evenly: a gap of {widest} against a mean of {mean}");
+        let logs = history.messages().iter().filter(|m| m.channel == 2).count();
+        assert_eq!(logs, 100, "a small topic is not thinned");
     }
 }
