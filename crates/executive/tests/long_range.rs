@@ -164,7 +164,7 @@ fn summary(r: &Report) -> String {
 /// --test long_range -- --ignored`. An acceptance test SR2 does not pass yet (it stays in
 /// avoidance at the start in the Pathfinder rock field): docs/results/2026-11-28-long-range.md.
 #[test]
-#[ignore = "release speed: a 1.3 km traverse"]
+#[ignore = "acceptance test of issue 42 that SR2 fails today (0/11 waypoints; docs/results/2026-11-28-long-range.md); not in .ci/run until it passes"]
 fn sr2_field_test_reaches_every_waypoint_without_contact() {
     let r = run(&mission_file("sr2-field-test.toml"));
     eprintln!("{}", summary(&r));
@@ -175,7 +175,7 @@ fn sr2_field_test_reaches_every_waypoint_without_contact() {
 /// Paper 001 section 7: the closed loop's dead-reckoning error at the finish within 2 % of the
 /// distance travelled. An acceptance test SR2 does not pass yet (as above).
 #[test]
-#[ignore = "release speed: a 240 m loop"]
+#[ignore = "acceptance test of issue 42 that SR2 fails today (0/4 legs of the loop); not in .ci/run until it passes"]
 fn sr2_dead_reckoning_loop_closes_within_two_percent() {
     let r = run(&mission_file("sr2-dead-reckoning-loop.toml"));
     eprintln!("{}", summary(&r));
