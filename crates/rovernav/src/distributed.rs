@@ -374,6 +374,7 @@ mod with {
             .remote(Box::new(link))
             .operator(&mut operator)
             .observer(&mut log.recorder)
+            .measure_peak_rss()
             .execute();
         log.close(output.is_ok())?;
         let output = output?;

@@ -100,8 +100,10 @@ mod over_zenoh {
         let mut report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
         let fields = report.as_object_mut().unwrap();
+        // Measurements of the process, not of the run: each process has its own.
         fields.remove("wall_time_s");
         fields.remove("compute_per_cycle");
+        fields.remove("peak_rss_mb");
         report
     }
 
