@@ -5,7 +5,7 @@
 use rovernav_core::Point2;
 use rovernav_executive::mission::{Mission, TerrainSpec};
 use rovernav_executive::world::{TiledSource, optimal_length, tiled_source};
-use rovernav_executive::{Report, Run, RunOptions, RunSettings, build_world};
+use rovernav_executive::{Report, Run, RunOptions, RunSettings, World, build_world};
 use rovernav_terrain::LocalRect;
 use rovernav_terrain::tiled::TiledTerrain;
 use std::path::PathBuf;
@@ -28,6 +28,21 @@ fn short_traverse(window_m: f64) -> Mission {
     m.goal.y = Some(y + 4.0);
     m.time_limit_s = 3600.0;
     m
+}
+
+/// The mission's world and tiled source, and a simulator driving on the source's window.
+fn windowed_simulator(mission: &Mission) -> (World, TiledSource, rovernav_sim::Simulator) {
+    let world = build_world(mission, "test").unwrap();
+    let source = tiled_source(mission).unwrap();
+    let sim = rovernav_sim::Simulator::new(
+        world.terrain.clone(),
+        world.rover.clone(),
+        world.sensor_model.clone(),
+        world.start,
+        1,
+    )
+    .with_window(source.window());
+    (world, source, sim)
 }
 
 fn run(mission: &Mission) -> Report {
@@ -101,16 +116,7 @@ fn the_simulator_drives_on_the_tiles_heights_after_refills() {
     let mut mission = short_traverse(20.0);
     let TerrainSpec::Tiled(spec) = &mut mission.terrain else { panic!("tiled") };
     spec.rock_abundance = 0.2;
-    let world = build_world(&mission, "test").unwrap();
-    let source = tiled_source(&mission).unwrap();
-    let mut sim = rovernav_sim::Simulator::new(
-        world.terrain.clone(),
-        world.rover.clone(),
-        world.sensor_model.clone(),
-        world.start,
-        1,
-    )
-    .with_window(source.window());
+    let (world, source, mut sim) = windowed_simulator(&mission);
     for _ in 0..12 {
         let _ = sim.execute(&rovernav_core::NavCommand::Drive {
             distance: 1.0,
@@ -193,16 +199,7 @@ fn tiled_simulation_memory_does_not_grow_with_distance() {
     let TerrainSpec::Tiled(spec) = &mut mission.terrain else { panic!("tiled") };
     (spec.relief_m, spec.ridge_m, spec.craters_per_hectare) = (1.0, 0.0, 0.0);
     mission.start.yaw_deg = 0.0;
-    let world = build_world(&mission, "test").unwrap();
-    let source = tiled_source(&mission).unwrap();
-    let mut sim = rovernav_sim::Simulator::new(
-        world.terrain.clone(),
-        world.rover.clone(),
-        world.sensor_model.clone(),
-        world.start,
-        1,
-    )
-    .with_window(source.window());
+    let (_, _, mut sim) = windowed_simulator(&mission);
     let start = sim.truth();
     let mut drive = |metres: f64| {
         let wall = std::time::Instant::now();
