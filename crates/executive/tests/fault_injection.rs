@@ -203,8 +203,10 @@ fn a_fault_naming_an_unknown_component_is_a_one_line_error() {
 }
 
 /// Campaign `full`, trial 5: SR2 drove into a tilt hazard and kept commanding the same motion,
-/// logging 4995 hazard contacts before its cycle budget ran out. The contact monitor now stops
-/// it at the third contact, judged from the platform's motion-stop reports alone.
+/// logging 4995 hazard contacts before its cycle budget ran out. The contact monitor then stopped
+/// it at the third contact (its limit: `sensor_servers`' unit test). Since SR2 backs up only over
+/// ground it has just driven over (`navigation::sr2`), after a stop right behind a turn it
+/// rotates again instead of backing blindly and re-entering: it now gets past the crater.
 #[test]
 fn regression_sr2_rammed_the_terrain_4995_times_in_campaign_full_trial_5() {
     let text = r#"
@@ -253,15 +255,11 @@ y = 20.0
         .execute()
         .expect("runs")
         .report;
-    assert_eq!(r.outcome, "help_requested", "{}", r.message);
-    assert_eq!(r.hazard_contacts, 3, "stopped at the third contact: {}", r.message);
-    let fault = r.fault.as_ref().expect("a diagnosed fault");
-    assert_eq!(
-        (fault.kind.as_str(), fault.component.as_deref()),
-        ("hazard_contact", Some("contact-monitor"))
-    );
-    // Independent of the monitor: the logged frames show three motions stopped on the terrain.
+    assert_eq!(r.outcome, "reached", "{}", r.message);
+    assert!(r.hazard_contacts < 3, "under the monitor's limit: {}", r.hazard_contacts);
+    assert!(r.fault.is_none(), "no fault: {:?}", r.fault);
+    // Independent of the report: the logged frames show as many motions stopped on the terrain.
     let stops =
         log.frames.iter().filter(|f| f.motion_stopped.as_deref().is_some_and(|w| w.starts_with("hazard")));
-    assert_eq!(stops.count(), 3);
+    assert_eq!(stops.count(), r.hazard_contacts as usize);
 }

@@ -14,7 +14,19 @@
 //!   middle (3..7, set back on the body so they trigger closer) and right (7..10) clusters,
 //!   angled down so that level ground returns beyond the threshold. A sensor triggers when its
 //!   (noisy) range is below `RoverConfig::proximity_range` (an obstacle) or when the expected
-//!   ground return is missing (the ground drops away: a hole or cliff).
+//!   ground return is missing (the ground drops away: a hole or cliff). The paper gives no mount
+//!   or aim; it says the sensors tell "whether or not there was an obstacle in the robot's way"
+//!   and that the rover makes its way *over* or around hazards. So each beam is aimed to reach the
+//!   trigger range at 0.8 of the rover's belly clearance above the wheel plane
+//!   (`ProximityModel::aim_fraction`): a rock the rover can drive over passes under the beam, one
+//!   it cannot is seen; the 20 % margin covers range noise and the body's pitch over the terrain
+//!   (aimed at the full clearance, SR2 touched rocks just over it in 22 of 100 yards). Departure
+//!   from an earlier model here, a fixed 16 deg depression from a 0.25 m mount that triggered on
+//!   anything taller than ~0.08 m at 0.58 m ahead, under half the 0.18 m clearance: at Pathfinder
+//!   rock densities SR2 turned on the spot until it gave up
+//!   (`docs/results/2026-11-28-sr2-proximity.md`). The mount (0.38 m, near the top of SR2's
+//!   40 cm envelope; assumed) keeps the level-ground return plus the drop margin within the
+//!   GP2Y0A02YK's 1.5 m range with that aim.
 //! - Proprioception (paper 001 section 3: compass at +-0.5 deg and encoders; paper 004 section
 //!   3.1-3.2: fibre-optic azimuth gyro, absolute inclinometer, odometry): sampled at 10 Hz while
 //!   moving and once at rest after each command.
@@ -83,9 +95,10 @@ pub struct ProximityModel {
     pub bearings: [f64; 10],
     /// How far each sensor sits behind the front of the body (m); the middle cluster is set back.
     pub setback: [f64; 10],
-    /// Slant range of the level-ground return as a multiple of the trigger threshold; sets the
-    /// beam depression.
-    pub ground_return_ratio: f64,
+    /// Height above the wheel plane at which each beam reaches the trigger range, as a fraction
+    /// of the rover's belly clearance: below 1 so that a rock just taller than the clearance is
+    /// seen despite range noise and the body's pitch over the terrain.
+    pub aim_fraction: f64,
     /// A return farther than the expected ground return by more than this (or none) means the
     /// ground dropped away (m).
     pub drop_margin: f64,
@@ -210,11 +223,12 @@ impl Default for SensorModel {
             },
             // Paper 001 sections 3 and 5.2: ten Sharp GP2Y0A02YK detectors, three clusters over
             // about +-45 deg, the middle cluster set back; the 15 Hz Sharp sampling is noisy.
+            // Mount assumed: see the module doc (beams aimed under the belly clearance).
             proximity: ProximityModel {
-                height: 0.25,
+                height: 0.38,
                 bearings: [45.0, 35.0, 25.0, 15.0, 5.0, -5.0, -15.0, -25.0, -35.0, -45.0].map(deg),
                 setback: [0.0, 0.0, 0.0, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.0],
-                ground_return_ratio: 1.5,
+                aim_fraction: 0.8,
                 drop_margin: 0.35,
                 range_sigma: 0.02,
             },
@@ -402,9 +416,9 @@ pub fn proximity(
     model: &ProximityModel,
     rng: &mut ChaCha8Rng,
 ) -> ProximityReading {
-    let threshold = rover.proximity_range;
-    let ground_return = (threshold * model.ground_return_ratio).max(model.height);
-    let depression = (model.height / ground_return).clamp(-1.0, 1.0).asin();
+    let threshold = rover.proximity_range.max(1e-3);
+    let depression = beam_depression(model.height, model.aim_fraction * rover.clearance, threshold);
+    let ground_return = model.height / depression.sin();
     let listen = ground_return + model.drop_margin;
     let (sd, cd) = depression.sin_cos();
     let half_width = 0.5 * rover.width;
@@ -425,6 +439,15 @@ pub fn proximity(
         };
     }
     reading
+}
+
+/// Depression (rad) of a beam from `height` that reaches `threshold` slant range `aim` above the
+/// wheel plane; an aim above half the mount is lowered to half of it (a beam near level would see
+/// no ground, so every sensor would report a drop).
+fn beam_depression(height: f64, aim: f64, threshold: f64) -> f64 {
+    let height = height.max(1e-3);
+    let aim = aim.clamp(0.0, 0.5 * height);
+    ((height - aim) / threshold.max(1e-3)).clamp(1e-3, 1.0).asin()
 }
 
 /// The gyro's slowly varying bias and the proprioceptive noise stream.

@@ -158,3 +158,32 @@ fn injected_faults_silence_sensors_stall_wheels_and_blank_the_compass() {
     assert!(sim.truth().yaw > 0.0);
     assert!(sim.distance_driven() < 0.1);
 }
+
+#[test]
+fn proximity_guard_passes_rocks_under_the_clearance_and_stops_at_taller_ones() {
+    // The truth is the hazard model: a rock lower than the belly clearance is driven over without
+    // a hazard contact, so the guard must not stop for one well under the beams' aim; a rock
+    // taller than the clearance, even by a centimetre, must stop the rover before it touches it.
+    let rover = RoverConfig::default();
+    let aim = SensorModel::default().proximity.aim_fraction;
+    let low = [0.4, 0.9 * aim].map(|f| (f * rover.clearance, false));
+    let tall = [1.05, 1.25, 1.6, 2.5].map(|f| (f * rover.clearance, true));
+    for (seed, (height, stops)) in low.into_iter().chain(tall).enumerate() {
+        let mut t = flat(12.0, 0.05);
+        add_rock(&mut t, Rock { x: 6.0, y: 5.0, diameter: 0.35, height });
+        let start = Pose2::new(3.0, 5.0, 0.0);
+        let mut sim = Simulator::new(t, rover.clone(), SensorModel::default(), start, seed as u64);
+        let guard = rovernav_core::DriveGuard { proximity: true, max_tilt: None };
+        let f = sim.execute(&NavCommand::Drive { distance: 5.0, curvature: 0.0, guard });
+        if stops {
+            let why = f.motion_stopped.expect("stopped");
+            assert!(why.contains("proximity"), "{height} m rock: {why}");
+            assert_eq!(sim.hazard_contacts(), 0, "{height} m rock: stopped before touching it");
+            assert!(sim.truth().x < 6.0 - 0.4, "{height} m rock: stopped short of it");
+        } else {
+            assert!(f.motion_stopped.is_none(), "{height} m rock: {:?}", f.motion_stopped);
+            assert!(sim.truth().x > 7.5, "{height} m rock: drove over it");
+            assert_eq!(sim.hazard_contacts(), 0, "{height} m rock is under the clearance");
+        }
+    }
+}
