@@ -15,6 +15,9 @@ use std::net::{SocketAddr, TcpStream};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+/// The console tests' client, for its frame encoder.
+mod console_client;
+
 const TOKEN: &str = "fox-token_42";
 
 /// A server frame.
@@ -65,22 +68,7 @@ impl Client {
     }
 
     fn send_text(&mut self, text: &str) {
-        let payload = text.as_bytes();
-        let mask = [0x12u8, 0x34, 0x56, 0x78];
-        let mut frame = vec![0x81u8];
-        match payload.len() {
-            n if n < 126 => frame.push(0x80 | n as u8),
-            n if n < 65536 => {
-                frame.push(0x80 | 126);
-                frame.extend_from_slice(&(n as u16).to_be_bytes());
-            }
-            n => {
-                frame.push(0x80 | 127);
-                frame.extend_from_slice(&(n as u64).to_be_bytes());
-            }
-        }
-        frame.extend_from_slice(&mask);
-        frame.extend(payload.iter().enumerate().map(|(i, b)| b ^ mask[i % 4]));
+        let frame = console_client::masked_frame(1, text.as_bytes());
         self.stream.get_mut().write_all(&frame).unwrap();
     }
 
