@@ -128,13 +128,6 @@ impl Hub {
         self.lock().channels.get((id as usize).checked_sub(1)?).cloned()
     }
 
-    /// The channel of a topic.
-    pub fn channel_of(&self, topic: &str) -> Option<Arc<Channel>> {
-        let state = self.lock();
-        let id = *state.by_topic.get(topic)?;
-        state.channels.get(id as usize - 1).cloned()
-    }
-
     /// How many watchers are subscribed now.
     pub fn watchers(&self) -> usize {
         self.events.receiver_count()
