@@ -189,6 +189,11 @@ class ConsoleInABrowser(unittest.TestCase):
         answer = wait("the turn's answer", lambda: [t for t in self.log_texts() if t.startswith("`turn 45") and "completed" in t])
         self.commander.find_element(By.CSS_SELECTOR, '#pad button[data-cmd="turn -45"]').click()
         wait("the turn back", lambda: [t for t in self.log_texts() if t.startswith("`turn -45") and "completed" in t])
+        # The science pair: the Navcam button takes a stereo pair and the camera panel can show it.
+        press("navcam")
+        pair = wait("the pair's answer", lambda: [t for t in self.log_texts() if t.startswith("`navcam 0 -20` completed")])
+        self.assertIn("2 images (navcam_left", pair[0])
+        wait("the pair in the camera list", lambda: self.js("[...document.getElementById('camsel').options].some((o) => o.text.includes('navcam'))"))
         press("resume")
         turned = float(answer[0].split("completed: ")[1].split(" deg")[0])
         self.assertAlmostEqual(turned, 45.0, delta=5.0, msg=answer[0])

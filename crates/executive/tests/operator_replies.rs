@@ -173,3 +173,31 @@ fn a_stall_during_a_drive_is_answered_with_the_stall_and_the_fault_that_ended_th
     assert!(over.contains("mission over: help_requested (fault protection (stuck_wheel)"), "{over}");
     assert_eq!(log.cycles.len(), 1, "the second drive never ran");
 }
+
+#[test]
+fn a_navcam_command_takes_a_stereo_pair_where_it_points_and_answers_with_the_images() {
+    let script = [(0, "navcam 0 -20"), (0, "mission pause"), (0, "navcam 30 -20"), (1, "mission abort")];
+    let (op, log, start, outcome) = run(None, &script);
+    assert_eq!(outcome, "aborted");
+    // While the mission runs, the mast is the navigator's: refused like a drive.
+    let refused = op.reply_containing("`navcam 0 -20`").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(refused.contains("needs the mission paused"), "{refused}");
+    // The command the platform executed is the pair at the asked pan and tilt, and no motion.
+    let executed: Vec<_> = log
+        .cycles
+        .iter()
+        .filter_map(|(c, _)| match c {
+            NavCommand::Sense(requests) => Some(requests.clone()),
+            _ => None,
+        })
+        .collect();
+    let pair = [rovernav_core::SenseRequest::Navcam { pan: 30f64.to_radians(), tilt: (-20f64).to_radians() }];
+    assert!(executed.iter().any(|r| r[..] == pair[..]), "{executed:?}");
+    let last = log.cycles.last().expect("a cycle").1;
+    assert!((last.x - start.x).hypot(last.y - start.y) < 0.02, "pictures do not move the rover");
+    // The answer names both images, which the camera server put on /camera/image.
+    let answer =
+        op.reply_containing("`navcam 30 -20` completed").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(answer.contains("2 images (navcam_left ") && answer.contains("navcam_right "), "{answer}");
+    assert_eq!(log.replies, op.replies);
+}

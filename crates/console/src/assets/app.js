@@ -195,6 +195,10 @@ el("resume").onclick = () => send({ type: "command", line: "mission start" });
 el("abort").onclick = () => { if (confirm("Abort the mission?")) send({ type: "command", line: "mission abort" }); };
 el("take").onclick = () => send({ type: "take_control" });
 el("camsel").onchange = showCamera;
+el("navcam").onclick = () => {
+  const angle = (id, limit, otherwise) => { const v = parseFloat(el(id).value); return Number.isFinite(v) ? Math.max(-limit, Math.min(limit, v)) : otherwise; };
+  send({ type: "command", line: `navcam ${angle("navpan", 180, 0)} ${angle("navtilt", 90, -20)}` });
+};
 document.querySelectorAll("#pad button").forEach((b) => {
   b.onclick = () => {
     const step = Math.max(0.1, Math.min(5, parseFloat(el("step").value) || 0.5));

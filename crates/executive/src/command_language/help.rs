@@ -1,7 +1,7 @@
 //! The command language's help: one entry per command, its usage forms and details.
 
 use super::{
-    CommandError, USAGE_DRIVE, USAGE_GOTO, USAGE_HELP, USAGE_PLACE, USAGE_SET, USAGE_TURN,
+    CommandError, USAGE_DRIVE, USAGE_GOTO, USAGE_HELP, USAGE_NAVCAM, USAGE_PLACE, USAGE_SET, USAGE_TURN,
     USAGE_WAYPOINT_ADD, unknown_topic,
 };
 
@@ -72,6 +72,13 @@ pub(super) const HELP: &[HelpEntry] = &[
                  side). The rover turns to face the point if needed, images it with the front Hazcams and the \
                  Navcams, and places on the safe target nearest it; a refusal (no_data, normal, roughness, \
                  reach, collision) moves nothing.",
+    },
+    HelpEntry {
+        name: "navcam",
+        forms: &[(USAGE_NAVCAM, "take a Navcam stereo pair with the mast head at PAN, TILT degrees")],
+        detail: "Needs the mission paused, like `drive` and `turn`. PAN counter-clockwise from forward (default 0), \
+                 TILT up from level within -90..90 (default -20: the ground about 4 m ahead). The pair goes on \
+                 /camera/image: the console's camera panel, the log and `track ROW COL` use it.",
     },
     HelpEntry {
         name: "status",

@@ -10,7 +10,7 @@
 //! goto X Y                     waypoint add X Y | waypoint clear | waypoint list
 //! mission start | pause | abort  stop   status   help [COMMAND]
 //! drive D                      turn A              set position X Y [YAW]
-//! track ROW COL | track X Y Z   place X Y
+//! track ROW COL | track X Y Z   place X Y           navcam [PAN [TILT]]
 //! ```
 //!
 //! A `#` starts a comment running to the end of the line; blank and comment-only lines parse to
@@ -102,6 +102,14 @@ pub enum OperatorCommand {
         /// North (m).
         y: f64,
     },
+    /// `navcam [PAN [TILT]]`: take a Navcam stereo pair with the mast head at PAN, TILT (body
+    /// frame; defaults 0 and [`DEFAULT_NAVCAM_TILT_DEG`]), outside the mission plan.
+    Navcam {
+        /// Pan, counter-clockwise from forward (rad).
+        pan: f64,
+        /// Tilt, positive up (rad), within +-90 degrees.
+        tilt: f64,
+    },
     /// `status`: print the rover's state.
     Status,
     /// `help [COMMAND]`: list the commands, or describe one.
@@ -119,10 +127,15 @@ pub const MAX_DRIVE_M: f64 = 1_000.0;
 pub const MAX_COORDINATE_M: f64 = crate::mission::check::MAX_COORDINATE_M;
 /// Largest image row or column (px).
 pub const MAX_PIXEL: f64 = 100_000.0;
+/// The Navcam tilt of a `navcam` command without TILT (degrees): the ground about 4 m ahead of
+/// a mast head 1.5 m up.
+pub const DEFAULT_NAVCAM_TILT_DEG: f64 = -20.0;
 
 /// Every command's first keyword, in the order `help` lists them (for completion and help topics).
-pub const COMMAND_NAMES: &[&str] =
-    &["goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "place", "status", "help"];
+pub const COMMAND_NAMES: &[&str] = &[
+    "goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "place", "navcam", "status",
+    "help",
+];
 
 /// A malformed command line or unknown help topic: which token was wrong and what was expected.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -161,6 +174,7 @@ const USAGE_SET: &str = "set position X Y [YAW]";
 const USAGE_HELP: &str = "help [COMMAND]";
 const USAGE_TRACK: &str = "track ROW COL | track X Y Z";
 const USAGE_PLACE: &str = "place X Y";
+const USAGE_NAVCAM: &str = "navcam [PAN [TILT]]";
 
 fn unknown_topic(index: usize, topic: &str) -> CommandError {
     CommandError {
@@ -370,6 +384,22 @@ pub fn parse_command(line: &str) -> Result<Option<OperatorCommand>, CommandError
             tokens.end(USAGE_PLACE)?;
             OperatorCommand::Place { x, y }
         }
+        "navcam" => {
+            let pan = tokens.optional_number(Unit::Degrees, "PAN", USAGE_NAVCAM)?.unwrap_or(0.0);
+            let (tilt_index, tilt_token) = (tokens.index + 1, tokens.words.clone().next());
+            let tilt = tokens
+                .optional_number(Unit::Degrees, "TILT", USAGE_NAVCAM)?
+                .unwrap_or(DEFAULT_NAVCAM_TILT_DEG.to_radians());
+            if tilt.abs() > 90f64.to_radians() {
+                return Err(Tokens::error(
+                    tilt_index,
+                    tilt_token,
+                    format!("a tilt (degrees) within -90..90 for TILT in \"{USAGE_NAVCAM}\""),
+                ));
+            }
+            tokens.end(USAGE_NAVCAM)?;
+            OperatorCommand::Navcam { pan, tilt }
+        }
         "status" => {
             tokens.end("status")?;
             OperatorCommand::Status
@@ -456,6 +486,7 @@ impl fmt::Display for OperatorCommand {
                 write!(f, "track {} {} {}", number_text(*x), number_text(*y), number_text(*z))
             }
             Self::Place { x, y } => write!(f, "place {} {}", number_text(*x), number_text(*y)),
+            Self::Navcam { pan, tilt } => write!(f, "navcam {} {}", angle_text(*pan), angle_text(*tilt)),
             Self::Status => f.write_str("status"),
             Self::Help { topic: None } => f.write_str("help"),
             Self::Help { topic: Some(topic) } => write!(f, "help {topic}"),

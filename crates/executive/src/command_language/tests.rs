@@ -48,6 +48,9 @@ fn every_command_parses_to_its_typed_values() {
     assert_eq!(parsed("stop"), C::Stop);
     assert_eq!(parsed("drive -1.25"), C::Drive { distance: -1.25 });
     assert_eq!(parsed("status"), C::Status);
+    assert_eq!(parsed("navcam"), C::Navcam { pan: 0.0, tilt: (-20f64).to_radians() });
+    assert_eq!(parsed("navcam 30"), C::Navcam { pan: 30f64.to_radians(), tilt: (-20f64).to_radians() });
+    assert_eq!(parsed("NAVCAM -45deg 0.5rad"), C::Navcam { pan: (-45f64).to_radians(), tilt: 0.5 });
     assert_eq!(parsed("help"), C::Help { topic: None });
     assert_eq!(parsed("help waypoint"), C::Help { topic: Some("waypoint".into()) });
     let C::Turn { angle } = parsed("turn 90") else { panic!("not a turn") };
@@ -272,6 +275,7 @@ fn command() -> impl Strategy<Value = OperatorCommand> {
         (finite(), finite()).prop_map(|(row, col)| C::TrackPixel { row, col }),
         (finite(), finite(), finite()).prop_map(|(x, y, z)| C::TrackSite { x, y, z }),
         (finite(), finite()).prop_map(|(x, y)| C::Place { x, y }),
+        (finite(), -90.0..=90.0f64).prop_map(|(pan, tilt)| C::Navcam { pan, tilt: tilt.to_radians() }),
         Just(C::Status),
         proptest::option::of(proptest::sample::select(COMMAND_NAMES))
             .prop_map(|topic| C::Help { topic: topic.map(str::to_string) }),
@@ -314,4 +318,14 @@ proptest! {
         let text = command.to_string();
         prop_assert_eq!(parse_command(&text), Ok(Some(command.clone())), "text {:?}", text);
     }
+}
+
+#[test]
+fn a_navcam_tilt_beyond_straight_up_or_down_names_its_token() {
+    let e = parse_command("navcam 10 95").unwrap_err();
+    assert_eq!((e.index, e.token_text()), (3, "95"));
+    assert!(e.expected.contains("-90..90") && e.expected.contains("navcam [PAN [TILT]]"), "{}", e.expected);
+    assert!(parse_command("navcam 10 -90").is_ok(), "straight down is allowed");
+    let e = parse_command("navcam 1 2 3").unwrap_err();
+    assert_eq!((e.index, e.token_text()), (4, "3"));
 }

@@ -3,7 +3,9 @@
 
 use super::{Deliberative, MissionState, Role, TaskKind};
 use crate::command_language::{OperatorCommand, help_text, parse_command};
-use crate::messages::{CommandMsg, ControlAction, MotionRequest, Origin, PoseMsg, TaskState, topics};
+use crate::messages::{
+    CommandMsg, ControlAction, MotionRequest, Origin, PoseMsg, SenseMsg, TaskState, topics,
+};
 use rovernav_bus::{Bus, BusError};
 use rovernav_core::{DriveGuard, Outcome, Point2};
 
@@ -91,6 +93,12 @@ impl Deliberative {
             C::TrackPixel { row, col } => self.track(super::Designation::Pixel { row, col }),
             C::TrackSite { x, y, z } => self.track(super::Designation::Site { x, y, z }),
             C::Place { x, y } => self.queue(TaskKind::PlaceInstrument { target: Point2::new(x, y) }),
+            C::Navcam { pan, tilt } => self.direct(
+                bus,
+                cmd.clone(),
+                super::direct::Asked::Pictures,
+                CommandMsg::Sense(vec![SenseMsg::Navcam { pan, tilt }]),
+            )?,
             C::Status => self.status_text(),
             C::Help { topic } => match help_text(topic.as_deref()) {
                 Ok(text) => text.trim_end().to_string(),

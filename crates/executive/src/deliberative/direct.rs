@@ -1,4 +1,4 @@
-//! The operator's direct motions (`drive`, `turn`) followed to their end: each is answered once
+//! The operator's direct commands (`drive`, `turn`, `navcam`) followed to their end: each is answered once
 //! the platform has executed it, with its completion or the reason it stopped (the guard that
 //! tripped, a hazard contact, a stall) and how far it went, or with why it never ran (an
 //! emergency stop, the mission's end). Tasks the operator queued (`place`, `track`) are answered
@@ -26,6 +26,8 @@ pub(super) struct DirectMotion {
     pub start: Option<Pose3>,
     /// Once executed: the frame's number and why the motion stopped, if it did.
     pub executed: Option<(u64, Option<String>)>,
+    /// The images the executed command returned (camera and size), for `navcam`.
+    pub images: Vec<String>,
 }
 
 /// What a direct motion asked for.
@@ -35,6 +37,8 @@ pub(super) enum Asked {
     Drive(f64),
     /// Turn by this angle (rad).
     Turn(f64),
+    /// Take pictures (no motion).
+    Pictures,
 }
 
 /// The guard or event a platform's `motion_stopped` text names, in the operator's words.
@@ -56,7 +60,7 @@ impl Deliberative {
     /// Remembers a direct motion just requested, to answer it when it has run.
     pub(super) fn follow_direct(&mut self, id: u64, text: String, asked: Asked) {
         let start = self.estimate.as_ref().map(|e| e.pose);
-        self.direct.push(DirectMotion { id, text, asked, start, executed: None });
+        self.direct.push(DirectMotion { id, text, asked, start, executed: None, images: Vec::new() });
     }
 
     /// Notes a frame that executed a followed direct motion.
@@ -74,6 +78,7 @@ impl Deliberative {
                 false => w.clone(),
             });
             d.executed = Some((f.seq, why));
+            d.images = f.images.iter().map(|i| format!("{} {}x{}", i.camera, i.width, i.height)).collect();
         }
     }
 
@@ -128,17 +133,26 @@ impl Deliberative {
 /// The answer to an executed direct motion, the estimate `end` after it.
 fn outcome_text(d: &DirectMotion, end: &Pose3) -> String {
     let stopped = d.executed.as_ref().and_then(|(_, why)| why.as_deref());
-    let Some(start) = d.start else {
-        return match stopped {
-            Some(why) => format!("`{}` stopped: {} ({why})", d.text, stop_cause(why)),
-            None => format!("`{}` completed", d.text),
-        };
-    };
-    let (done, asked) = match d.asked {
-        Asked::Drive(m) => {
+    let (done, asked) = match (d.asked, d.start) {
+        (Asked::Pictures, _) => {
+            return match (stopped, d.images.len()) {
+                (Some(why), _) => format!("`{}` failed: {why}", d.text),
+                (None, 0) => format!("`{}` completed, but no image came back", d.text),
+                (None, n) => {
+                    format!("`{}` completed: {n} images ({}) on /camera/image", d.text, d.images.join(", "))
+                }
+            };
+        }
+        (_, None) => {
+            return match stopped {
+                Some(why) => format!("`{}` stopped: {} ({why})", d.text, stop_cause(why)),
+                None => format!("`{}` completed", d.text),
+            };
+        }
+        (Asked::Drive(m), Some(start)) => {
             (format!("{:.2} m", (end.x - start.x).hypot(end.y - start.y)), format!("{:.2} m", m.abs()))
         }
-        Asked::Turn(a) => (
+        (Asked::Turn(a), Some(start)) => (
             format!("{:.1} deg", wrap_angle(end.yaw - start.yaw).to_degrees()),
             format!("{:.1} deg", a.to_degrees()),
         ),
