@@ -201,3 +201,27 @@ fn a_navcam_command_takes_a_stereo_pair_where_it_points_and_answers_with_the_ima
     assert!(answer.contains("2 images (navcam_left ") && answer.contains("navcam_right "), "{answer}");
     assert_eq!(log.replies, op.replies);
 }
+
+#[test]
+fn one_motor_pivots_the_rover_about_the_held_wheels_and_is_answered_with_its_travel() {
+    let script = [(0, "mission pause"), (0, "motor left 0.3"), (1, "motor right 0.3"), (2, "mission abort")];
+    let (op, log, start, outcome) = run(None, &script);
+    assert_eq!(outcome, "aborted");
+    let track = rovernav_core::RoverConfig::default().track;
+    // Truth: the left motor forward turns the rover clockwise by travel / track about the right
+    // wheels, whose contact point stays put; the right motor then turns it back about the left.
+    let after_left = log.cycles[0].1;
+    let turned = rovernav_core::wrap_angle(after_left.yaw - start.yaw);
+    assert!((turned + 0.3 / track).abs() < 0.03, "turned {:.3} rad, expected {:.3}", turned, -0.3 / track);
+    let held = |p: &Pose3| (p.x + (track / 2.0) * p.yaw.sin(), p.y - (track / 2.0) * p.yaw.cos());
+    let (before, after) = (held(&start), held(&after_left));
+    assert!((before.0 - after.0).hypot(before.1 - after.1) < 0.02, "the right wheels stayed put");
+    let back = rovernav_core::wrap_angle(log.cycles[1].1.yaw - start.yaw);
+    assert!(back.abs() < 0.03, "the right motor turned it back: {back:.3} rad");
+    // The answers state the driven side's travel, judged from the estimate.
+    let answer =
+        op.reply_containing("`motor left 0.3` completed").unwrap_or_else(|| panic!("{:?}", op.replies));
+    let said = metres_after(answer, "completed: ");
+    assert!((said - 0.3).abs() < 0.03, "{answer}");
+    assert!(op.reply_containing("`motor right 0.3` completed").is_some(), "{:?}", op.replies);
+}

@@ -199,7 +199,7 @@ el("navcam").onclick = () => {
   const angle = (id, limit, otherwise) => { const v = parseFloat(el(id).value); return Number.isFinite(v) ? Math.max(-limit, Math.min(limit, v)) : otherwise; };
   send({ type: "command", line: `navcam ${angle("navpan", 180, 0)} ${angle("navtilt", 90, -20)}` });
 };
-document.querySelectorAll("#pad button").forEach((b) => {
+document.querySelectorAll("#pad button, #motors button").forEach((b) => {
   b.onclick = () => {
     const step = Math.max(0.1, Math.min(5, parseFloat(el("step").value) || 0.5));
     b.dataset.cmd.split(";").forEach((line) => send({ type: "command", line: line.replace("STEP", step) }));

@@ -81,6 +81,15 @@ pub(super) const HELP: &[HelpEntry] = &[
                  /camera/image: the console's camera panel, the log and `track ROW COL` use it.",
     },
     HelpEntry {
+        name: "motor",
+        forms: &[
+            ("motor left D", "run the left motor D metres (negative backwards), the right wheels held"),
+            ("motor right D", "run the right motor D metres (negative backwards), the left wheels held"),
+        ],
+        detail: "Needs the mission paused. The rover pivots about the held side's wheels: D metres of wheel \
+                 travel turn it by D / track radians (clockwise for the left motor forward). D in metres, optional suffix m.",
+    },
+    HelpEntry {
         name: "status",
         forms: &[("status", "print the rover's state")],
         detail: "Pose estimate, mission state, goal and waypoints.",

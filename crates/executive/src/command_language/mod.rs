@@ -11,6 +11,7 @@
 //! mission start | pause | abort  stop   status   help [COMMAND]
 //! drive D                      turn A              set position X Y [YAW]
 //! track ROW COL | track X Y Z   place X Y           navcam [PAN [TILT]]
+//! motor left D | motor right D
 //! ```
 //!
 //! A `#` starts a comment running to the end of the line; blank and comment-only lines parse to
@@ -110,6 +111,15 @@ pub enum OperatorCommand {
         /// Tilt, positive up (rad), within +-90 degrees.
         tilt: f64,
     },
+    /// `motor left D` / `motor right D`: run one side's drive motor for D metres of wheel travel
+    /// (negative backwards) with the other side held, outside the mission plan (SR2's manual
+    /// control of each motor, paper 001 section 6): the rover pivots about the held wheels.
+    Motor {
+        /// Which side's motor runs.
+        side: MotorSide,
+        /// Signed wheel travel of that side (m).
+        distance: f64,
+    },
     /// `status`: print the rover's state.
     Status,
     /// `help [COMMAND]`: list the commands, or describe one.
@@ -117,6 +127,25 @@ pub enum OperatorCommand {
         /// The command asked about; `parse_command` stores it lower-case, one of [`COMMAND_NAMES`].
         topic: Option<String>,
     },
+}
+
+/// One side's drive motor (SR2 has one per side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MotorSide {
+    /// The left wheels.
+    Left,
+    /// The right wheels.
+    Right,
+}
+
+impl MotorSide {
+    /// `left` or `right`.
+    pub fn name(self) -> &'static str {
+        match self {
+            MotorSide::Left => "left",
+            MotorSide::Right => "right",
+        }
+    }
 }
 
 /// Largest magnitude of a `turn` angle or a `set position` yaw (degrees: 100 turns).
@@ -133,8 +162,8 @@ pub const DEFAULT_NAVCAM_TILT_DEG: f64 = -20.0;
 
 /// Every command's first keyword, in the order `help` lists them (for completion and help topics).
 pub const COMMAND_NAMES: &[&str] = &[
-    "goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "place", "navcam", "status",
-    "help",
+    "goto", "waypoint", "mission", "stop", "drive", "turn", "set", "track", "place", "navcam", "motor",
+    "status", "help",
 ];
 
 /// A malformed command line or unknown help topic: which token was wrong and what was expected.
@@ -175,6 +204,7 @@ const USAGE_HELP: &str = "help [COMMAND]";
 const USAGE_TRACK: &str = "track ROW COL | track X Y Z";
 const USAGE_PLACE: &str = "place X Y";
 const USAGE_NAVCAM: &str = "navcam [PAN [TILT]]";
+const USAGE_MOTOR: &str = "motor left D | motor right D";
 
 fn unknown_topic(index: usize, topic: &str) -> CommandError {
     CommandError {
@@ -400,6 +430,16 @@ pub fn parse_command(line: &str) -> Result<Option<OperatorCommand>, CommandError
             tokens.end(USAGE_NAVCAM)?;
             OperatorCommand::Navcam { pan, tilt }
         }
+        "motor" => {
+            let side = match tokens.keyword(&["left", "right"], USAGE_MOTOR)? {
+                "left" => MotorSide::Left,
+                _ => MotorSide::Right,
+            };
+            let usage = if side == MotorSide::Left { "motor left D" } else { "motor right D" };
+            let distance = tokens.number(Unit::Metres, "D", usage)?;
+            tokens.end(usage)?;
+            OperatorCommand::Motor { side, distance }
+        }
         "status" => {
             tokens.end("status")?;
             OperatorCommand::Status
@@ -487,6 +527,7 @@ impl fmt::Display for OperatorCommand {
             }
             Self::Place { x, y } => write!(f, "place {} {}", number_text(*x), number_text(*y)),
             Self::Navcam { pan, tilt } => write!(f, "navcam {} {}", angle_text(*pan), angle_text(*tilt)),
+            Self::Motor { side, distance } => write!(f, "motor {} {}", side.name(), number_text(*distance)),
             Self::Status => f.write_str("status"),
             Self::Help { topic: None } => f.write_str("help"),
             Self::Help { topic: Some(topic) } => write!(f, "help {topic}"),

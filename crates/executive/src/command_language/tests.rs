@@ -51,6 +51,10 @@ fn every_command_parses_to_its_typed_values() {
     assert_eq!(parsed("navcam"), C::Navcam { pan: 0.0, tilt: (-20f64).to_radians() });
     assert_eq!(parsed("navcam 30"), C::Navcam { pan: 30f64.to_radians(), tilt: (-20f64).to_radians() });
     assert_eq!(parsed("NAVCAM -45deg 0.5rad"), C::Navcam { pan: (-45f64).to_radians(), tilt: 0.5 });
+    assert_eq!(parsed("motor left 0.3"), C::Motor { side: MotorSide::Left, distance: 0.3 });
+    assert_eq!(parsed("MOTOR Right -2m"), C::Motor { side: MotorSide::Right, distance: -2.0 });
+    assert_eq!(parse_command("motor up 1").unwrap_err().index, 2);
+    assert_eq!(parse_command("motor left 1 2").unwrap_err().index, 4);
     assert_eq!(parsed("help"), C::Help { topic: None });
     assert_eq!(parsed("help waypoint"), C::Help { topic: Some("waypoint".into()) });
     let C::Turn { angle } = parsed("turn 90") else { panic!("not a turn") };
@@ -276,6 +280,10 @@ fn command() -> impl Strategy<Value = OperatorCommand> {
         (finite(), finite(), finite()).prop_map(|(x, y, z)| C::TrackSite { x, y, z }),
         (finite(), finite()).prop_map(|(x, y)| C::Place { x, y }),
         (finite(), -90.0..=90.0f64).prop_map(|(pan, tilt)| C::Navcam { pan, tilt: tilt.to_radians() }),
+        (any::<bool>(), finite()).prop_map(|(left, distance)| C::Motor {
+            side: if left { MotorSide::Left } else { MotorSide::Right },
+            distance
+        }),
         Just(C::Status),
         proptest::option::of(proptest::sample::select(COMMAND_NAMES))
             .prop_map(|topic| C::Help { topic: topic.map(str::to_string) }),

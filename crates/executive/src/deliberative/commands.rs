@@ -2,7 +2,7 @@
 //! plan, and the `status` answer.
 
 use super::{Deliberative, MissionState, Role, TaskKind};
-use crate::command_language::{OperatorCommand, help_text, parse_command};
+use crate::command_language::{MotorSide, OperatorCommand, help_text, parse_command};
 use crate::messages::{
     CommandMsg, ControlAction, MotionRequest, Origin, PoseMsg, SenseMsg, TaskState, topics,
 };
@@ -93,6 +93,25 @@ impl Deliberative {
             C::TrackPixel { row, col } => self.track(super::Designation::Pixel { row, col }),
             C::TrackSite { x, y, z } => self.track(super::Designation::Site { x, y, z }),
             C::Place { x, y } => self.queue(TaskKind::PlaceInstrument { target: Point2::new(x, y) }),
+            C::Motor { side, distance } => {
+                // Skid steering with one side held: the centre runs on a circle of radius track / 2
+                // about the held wheels, so half the wheel travel, at curvature 2 / track.
+                let track = self.rover.track;
+                let curvature = match side {
+                    MotorSide::Left => -2.0 / track,
+                    MotorSide::Right => 2.0 / track,
+                };
+                self.direct(
+                    bus,
+                    cmd.clone(),
+                    super::direct::Asked::Motor { distance, track },
+                    CommandMsg::Drive {
+                        distance: distance / 2.0,
+                        curvature,
+                        guard: DriveGuard { proximity: distance > 0.0, max_tilt: None },
+                    },
+                )?
+            }
             C::Navcam { pan, tilt } => self.direct(
                 bus,
                 cmd.clone(),

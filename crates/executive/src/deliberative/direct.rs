@@ -1,4 +1,4 @@
-//! The operator's direct commands (`drive`, `turn`, `navcam`) followed to their end: each is answered once
+//! The operator's direct commands (`drive`, `turn`, `motor`, `navcam`) followed to their end: each is answered once
 //! the platform has executed it, with its completion or the reason it stopped (the guard that
 //! tripped, a hazard contact, a stall) and how far it went, or with why it never ran (an
 //! emergency stop, the mission's end). Tasks the operator queued (`place`, `track`) are answered
@@ -37,6 +37,13 @@ pub(super) enum Asked {
     Drive(f64),
     /// Turn by this angle (rad).
     Turn(f64),
+    /// Run one side's motor, the other held: a pivot about the held wheels.
+    Motor {
+        /// The driven side's wheel travel asked (m; negative backwards).
+        distance: f64,
+        /// Track width: metres between the left and right wheels.
+        track: f64,
+    },
     /// Take pictures (no motion).
     Pictures,
 }
@@ -156,6 +163,18 @@ fn outcome_text(d: &DirectMotion, end: &Pose3) -> String {
             format!("{:.1} deg", wrap_angle(end.yaw - start.yaw).to_degrees()),
             format!("{:.1} deg", a.to_degrees()),
         ),
+        (Asked::Motor { distance, track }, Some(start)) => {
+            // The driven side's travel is the turn times the track (the held side stays put).
+            let turned = wrap_angle(end.yaw - start.yaw);
+            (
+                format!(
+                    "{:.2} m of wheel travel (turned {:.1} deg)",
+                    turned.abs() * track,
+                    turned.to_degrees()
+                ),
+                format!("{:.2} m", distance.abs()),
+            )
+        }
     };
     match stopped {
         Some(why) => {
