@@ -21,6 +21,7 @@ pub mod horizon;
 pub mod messages;
 pub mod mission;
 pub mod operator;
+pub mod orbital_prior;
 pub mod platform;
 pub mod power;
 pub mod reflexive;

@@ -80,6 +80,14 @@ pub(crate) fn assemble(
     Ok((runtime, remote))
 }
 
+/// Records a cycle's estimate, simulated time and the wall-clock time since the last one.
+fn record_sample(trace: &mut Trace, estimate: Pose3, t: f64, clock: &mut Instant) {
+    trace.estimate.push(estimate);
+    trace.sim_time_s.push(t);
+    trace.compute_s.push(clock.elapsed().as_secs_f64());
+    *clock = Instant::now();
+}
+
 /// Executes a configured run.
 pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
     let Run { mut world, settings, options, origin, link, observer, mut operator, progress } = run;
@@ -106,10 +114,14 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         scorer = Some(Scorer::new(&world, platform.sim().truth()));
         let first_frame = platform.initial_frame().clone();
         trace.estimate.push(estimator(&runtime).estimate().pose);
+        trace.sim_time_s.push(first_frame.t);
         observer.on_start(&world, &settings, &first_frame, &estimator(&runtime).estimate());
     } else {
         trace.estimate.push(estimator(&runtime).estimate().pose);
+        trace.sim_time_s.push(0.0);
     }
+    trace.compute_s.push(0.0);
+    let mut cycle_clock = Instant::now();
     runtime.command(None, ControlAction::Resume)?;
     runtime.settle(runtime.clock())?;
 
@@ -166,7 +178,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
                 for e in sim_platform_mut(&mut runtime).take_executed() {
                     cycles += 1;
                     scorer.record(&e);
-                    trace.estimate.push(estimate.pose);
+                    record_sample(&mut trace, estimate.pose, e.frame.t, &mut cycle_clock);
                     observer.on_cycle(&CycleRecord {
                         cycle: cycles,
                         sim_time_s: e.frame.t,
@@ -184,7 +196,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
             None => {
                 for frame in remote_platform(&mut runtime).take_executed() {
                     cycles += 1;
-                    trace.estimate.push(estimate.pose);
+                    record_sample(&mut trace, estimate.pose, frame.t, &mut cycle_clock);
                     // The rover process knows no truth: progress shows the estimated distance to go.
                     on_progress(&progress(cycles, frame.t, Point2::new(estimate.pose.x, estimate.pose.y)));
                 }
@@ -313,14 +325,18 @@ fn algorithms(
         })?;
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
     let no_params = rovernav_navigation::NavigatorParams::new();
-    let localizer = registry.build_localizer(&mission.localizer, &world.rover, initial, &no_params).map_err(
-        |e| match e {
+    // A localiser matching against an orbital map is given one derived from the terrain.
+    let prior = registry
+        .localizer_needs_prior_map(&mission.localizer)
+        .then(|| crate::orbital_prior::orbital_map(world, crate::orbital_prior::ORBITAL_MAP_RESOLUTION_M));
+    let localizer = registry
+        .build_localizer_with_prior(&mission.localizer, &world.rover, initial, &no_params, prior.as_ref())
+        .map_err(|e| match e {
             rovernav_navigation::NavigatorError::UnknownLocalizer { name, known } => {
                 RunError::UnknownLocalizer { origin: origin.into(), name, known: known.join(", ") }
             }
             other => RunError::NavigatorParams { origin: origin.into(), message: other.to_string() },
-        },
-    )?;
+        })?;
     Ok((navigator, localizer))
 }
 

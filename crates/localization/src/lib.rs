@@ -8,8 +8,10 @@
 //!   section 4) and partial Hausdorff (paper 002 section 3).
 //! - [`lander`]: the rover's position from the lander's stereo sighting (paper 002 section 2).
 //! - [`orbital`]: matching the rover's panorama map against an orbital DEM (paper 002 section 5).
-//! - [`orbital_map`]: the `orbital-map` localiser, the EKF with orbital-map fixes.
+//! - [`orbital_map`]: the `orbital-map` localiser, `ekf-ml` with fixes against an orbital map
+//!   given before the traverse.
 //! - [`target`]: choosing where to look for the next match (paper 000 section 4.4).
+//! - [`consistency`]: NEES and its chi-square bounds (is a filter's covariance honest?).
 //! - [`evaluation`]: the paper 002 sequence-accuracy protocol, reusable with any range sensor.
 //! - [`synthetic`]: seeded synthetic terrain and stereo-like range data for tests and benches.
 //! - [`benchmark`]: the matcher workloads of the benches and `rovernav bench report`.
@@ -22,6 +24,7 @@
 //! estimate, and fuse the result with [`Ekf::fuse_fix`].
 
 pub mod benchmark;
+pub mod consistency;
 pub mod dead_reckoning;
 pub mod ekf;
 pub mod ekf_ml;
@@ -39,6 +42,7 @@ pub use ekf_ml::{EkfMl, EkfMlParams, EkfMlStats};
 pub use matching::{
     HausdorffMatcher, HausdorffParams, MatchError, MatchResult, MlMatcher, MlParams, SearchWindow,
 };
+pub use orbital_map::{OrbitalMapLocalizer, OrbitalMapParams};
 pub use target::{TargetParams, select_target};
 
 use rovernav_core::{Localizer, Pose3, RoverConfig};

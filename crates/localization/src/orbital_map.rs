@@ -1,112 +1,293 @@
-//! The `orbital-map` localiser: the EKF (paper 004 section 3.2) with fixes from matching each
-//! mast panorama against an orbital DEM ([`crate::orbital`], paper 002 section 5).
+//! The `orbital-map` localiser: `ekf-ml` (the EKF of paper 004 section 3.2 with terrain-matching
+//! fixes against the rover's own map, paper 000 section 4) plus absolute fixes from matching the
+//! rover's map against an orbital DEM given to it before the traverse (paper 002 section 5,
+//! [`crate::orbital`]).
 //!
-//! Dead reckoning runs in the EKF. When a frame brings a panorama (at least
-//! `min_wedges` non-empty clouds), its points are levelled with the estimate's roll and pitch
-//! and binned into a rover-frame map, the orbital map is interpolated around the estimate, and
-//! the match is searched within `window_sigmas` of the estimate's covariance (at least
-//! `min_window_m`, at most `max_window_m`; heading +-`half_yaw`). A fix whose false-match
-//! probability exceeds `max_failure_probability`, or whose best pose lies on the window's edge,
-//! is rejected; the others are fused with their covariance (`Ekf::fuse_fix`).
+//! Between orbital fixes the rover localises as `ekf-ml` does. Every
+//! [`OrbitalMapParams::fix_interval_m`] of estimated travel (and at once when a frame brings a
+//! panorama, at least `min_wedges` clouds), the part of the rover's own elevation map within
+//! `range_m` of the estimate is averaged into `cell`-sized cells and matched against the
+//! orbital map around the estimate, in a window of `window_sigmas` of the filter's covariance
+//! (heading searched too). A fix is rejected when its false-match probability exceeds
+//! `max_failure_probability`, when its best pose lies on the window's edge, or when its
+//! position innovation fails the chi-square gate `gate` against the filter's and the fix's
+//! covariances; a rejected fix is retried `retry_interval_m` later, at most `max_retries`
+//! times before the next interval. A fused fix moves the
+//! rover's map with the estimate (`EkfMl::fuse_absolute_fix`).
 //!
-//! Unlike `ekf-ml`, whose map is its own and whose windows cover only the drift since that map
-//! was made, the orbital map is absolute: the window follows the filter's whole uncertainty.
+//! In the `fix_lead_m` before a fix is due, the localiser offers the look-back decorator
+//! sideways localisation targets (pans of +-45 to +-135 deg, in turn), so that the map to match
+//! is wider than the corridor the forward views cover.
+//!
+//! Departures from paper 002 section 5, with reasons:
+//! - The paper matches a panorama taken at one stop; here the map is the rover's own, built
+//!   while driving (a panorama at every fix would cost the traverse a stop each time). A
+//!   panorama, when the mission takes one, is used the same way.
+//! - The match covariance is scaled by `covariance_scale` before fusion: the matcher's
+//!   covariance counts 20 local cells per independent measurement (its temperature, measured
+//!   for rover-to-rover maps at 5 cm), which over-counts the correlation of 0.5 m cells of a
+//!   map smoothed to 1 m; the scale was measured as the mean NEES of the fixes against the
+//!   simulator's truth on development traverses (see `docs/results/2026-11-28-localization-scales.md`).
 
-use rovernav_core::{Grid2, Localizer, LocalizerStats, Pose3, PoseEstimate, RoverConfig, SensorFrame};
+use rovernav_core::{
+    Grid2, GridGeometry, Localizer, LocalizerStats, Point2, Pose2, Pose3, PoseEstimate, RoverConfig,
+    SensorFrame,
+};
 
-use crate::orbital::{OrbitalParams, match_orbital, panorama_map, reference_around};
-use crate::{Ekf, SearchWindow};
+use crate::matching::MatchResult;
+use crate::orbital::{OrbitalParams, degrade, match_orbital, reference_around};
+use crate::{EkfMl, EkfMlParams, SearchWindow};
 
 /// Settings of the `orbital-map` localiser.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OrbitalMapParams {
-    /// The match's settings.
+    /// The orbital match's settings.
     pub orbital: OrbitalParams,
+    /// The map matcher's settings between orbital fixes.
+    pub ekf_ml: EkfMlParams,
+    /// Resolution the orbital map is degraded to before use (m; a finer map is averaged over
+    /// blocks of it, see [`degrade`]); at or below the given map's it is used as given.
+    pub orbital_resolution_m: f64,
     /// Cell size of the matched maps (m).
     pub cell: f64,
-    /// Half-side of the rover-frame map (m): the panorama's range.
+    /// Half-side of the rover's map matched (m).
     pub range_m: f64,
-    /// Clouds a frame must bring to count as a panorama.
+    /// Estimated travel between orbital fixes (m).
+    pub fix_interval_m: f64,
+    /// Travel before a rejected or impossible fix is tried again (m).
+    pub retry_interval_m: f64,
+    /// Fixes tried again at most this many times before waiting a whole interval.
+    pub max_retries: u32,
+    /// Travel before a fix is due over which the look-backs pan sideways (m).
+    pub fix_lead_m: f64,
+    /// Clouds a frame must bring to count as a panorama (a fix is tried at once).
     pub min_wedges: usize,
-    /// Search half-width in estimate standard deviations.
+    /// Fewest known cells of the rover's map worth matching.
+    pub min_cells: usize,
+    /// Search half-width in filter standard deviations.
     pub window_sigmas: f64,
-    /// Smallest and largest search half-width (m).
+    /// Smallest search half-width (m).
     pub min_window_m: f64,
     /// Largest search half-width (m).
     pub max_window_m: f64,
-    /// Heading search half-width (rad).
-    pub half_yaw: f64,
+    /// Smallest heading search half-width (rad).
+    pub min_yaw: f64,
+    /// Largest heading search half-width (rad).
+    pub max_yaw: f64,
     /// Fixes more likely than this to be false are rejected.
     pub max_failure_probability: f64,
+    /// Factor on the match covariance before fusion.
+    pub covariance_scale: f64,
+    /// Chi-square gate (2 degrees of freedom) on the position innovation.
+    pub gate: f64,
 }
 
 impl Default for OrbitalMapParams {
     fn default() -> Self {
         Self {
             orbital: OrbitalParams::default(),
+            ekf_ml: EkfMlParams::default(),
+            orbital_resolution_m: 1.0,
             cell: 0.5,
             range_m: 12.0,
+            fix_interval_m: 100.0,
+            retry_interval_m: 5.0,
+            max_retries: 4,
+            fix_lead_m: 8.0,
             min_wedges: 6,
+            min_cells: 150,
             window_sigmas: 3.0,
             min_window_m: 1.0,
             max_window_m: 8.0,
-            half_yaw: 10f64.to_radians(),
+            min_yaw: 2f64.to_radians(),
+            max_yaw: 10f64.to_radians(),
             // `rovernav eval orbital`'s flag threshold (docs/results/2026-11-28-orbital.md).
             max_failure_probability: 0.3,
+            covariance_scale: 1.0,
+            // 99.9 % of a chi-square with 2 degrees of freedom.
+            gate: 13.8,
         }
     }
 }
 
-/// The EKF with orbital-map fixes.
+/// One orbital fix tried: the filter's estimate before it, the fix (the rover's pose with its
+/// scaled covariance) and whether it was fused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrbitalFix {
+    /// The estimate the match started from.
+    pub before: PoseEstimate,
+    /// The rover's pose from the match, with the covariance that was (or would have been) fused.
+    pub fix: MatchResult,
+    /// Whether the filter fused it.
+    pub used: bool,
+    /// Frames the localiser had been given when it tried the fix (this one included).
+    pub at_update: u64,
+}
+
+/// Counters of the orbital fixes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OrbitalStats {
+    /// Orbital matches tried.
+    pub attempted: u64,
+    /// Orbital fixes fused.
+    pub used: u64,
+    /// Fixes rejected for their false-match probability.
+    pub rejected_uncertain: u64,
+    /// Fixes rejected on the window's edge.
+    pub rejected_on_edge: u64,
+    /// Fixes rejected by the innovation gate (or the filter).
+    pub rejected_gate: u64,
+    /// Fixes not tried for too little of the rover's map, or matches that failed.
+    pub not_matched: u64,
+}
+
+/// `ekf-ml` with orbital-map fixes.
 #[derive(Clone, Debug)]
 pub struct OrbitalMapLocalizer {
-    ekf: Ekf,
+    inner: EkfMl,
     orbital: Grid2<f32>,
     params: OrbitalMapParams,
-    stats: LocalizerStats,
+    stats: OrbitalStats,
+    fixes: Vec<OrbitalFix>,
+    /// Estimated travel since the last fused orbital fix (or the start), in metres, counted
+    /// towards the next one.
+    travel: f64,
+    previous: Point2,
+    /// Sideways look-backs offered so far.
+    side_looks: usize,
+    /// Frames given so far.
+    updates: u64,
+    /// Failed fixes since the last fused one.
+    retries: u32,
 }
 
+/// The sideways pans offered before a fix (rad, body frame), in turn.
+const SIDE_PANS: [f64; 6] = [
+    std::f64::consts::FRAC_PI_2,
+    -std::f64::consts::FRAC_PI_2,
+    3.0 * std::f64::consts::FRAC_PI_4,
+    -3.0 * std::f64::consts::FRAC_PI_4,
+    std::f64::consts::FRAC_PI_4,
+    -std::f64::consts::FRAC_PI_4,
+];
+
 impl OrbitalMapLocalizer {
-    /// A localiser starting at `initial` with the world-frame orbital map `orbital` (any
-    /// resolution; NaN unknown).
-    pub fn new(config: &RoverConfig, initial: Pose3, orbital: Grid2<f32>, params: OrbitalMapParams) -> Self {
-        Self { ekf: Ekf::new(config, initial), orbital, params, stats: LocalizerStats::default() }
-    }
-
-    /// The underlying filter (e.g. to set its initial uncertainty).
-    pub fn ekf_mut(&mut self) -> &mut Ekf {
-        &mut self.ekf
-    }
-
-    fn try_fix(&mut self, frame: &SensorFrame) {
-        let p = self.params;
-        let estimate = self.ekf.estimate();
-        let points: Vec<[f32; 3]> = frame.clouds.iter().flat_map(|c| c.points.iter().copied()).collect();
-        let local = panorama_map(&points, estimate.pose.roll, estimate.pose.pitch, p.range_m, p.cell);
-        let mut window = SearchWindow::from_estimate(&estimate, p.window_sigmas, p.min_window_m, p.half_yaw);
-        window.half_x = window.half_x.min(p.max_window_m);
-        window.half_y = window.half_y.min(p.max_window_m);
-        window.half_yaw = window.half_yaw.min(p.half_yaw);
-        let reach = p.range_m + window.half_x.max(window.half_y) + 6.0;
-        let c = window.center;
-        let reference = reference_around(&self.orbital, c.x, c.y, reach, p.cell);
-        self.stats.matches_attempted += 1;
-        let Ok(fix) = match_orbital(&local, &reference, &window, &p.orbital) else {
-            self.stats.fixes_rejected += 1;
-            return;
+    /// A localiser starting at `initial` with the world-frame orbital map `orbital` (NaN
+    /// unknown), degraded to `params.orbital_resolution_m`.
+    pub fn new(config: &RoverConfig, initial: Pose3, orbital: &Grid2<f32>, params: OrbitalMapParams) -> Self {
+        let orbital = if params.orbital_resolution_m > 1.01 * orbital.resolution() {
+            degrade(orbital, params.orbital_resolution_m)
+        } else {
+            orbital.clone()
         };
-        let edge = 1.01 * p.cell;
-        let on_edge = (fix.pose.x - c.x).abs() > window.half_x - edge
-            || (fix.pose.y - c.y).abs() > window.half_y - edge;
-        let uncertain = fix.failure_probability > p.max_failure_probability;
-        if uncertain || on_edge || !self.ekf.fuse_fix(&fix) {
-            self.stats.fixes_rejected += 1;
-            self.stats.rejected_uncertain += u64::from(uncertain);
-            self.stats.rejected_on_edge += u64::from(on_edge && !uncertain);
-            return;
+        Self {
+            inner: EkfMl::with_params(config, initial, params.ekf_ml),
+            orbital,
+            params,
+            stats: OrbitalStats::default(),
+            fixes: Vec::new(),
+            travel: 0.0,
+            previous: Point2::new(initial.x, initial.y),
+            side_looks: 0,
+            updates: 0,
+            retries: 0,
         }
-        self.stats.fixes_used += 1;
     }
+
+    /// The map matcher underneath.
+    pub fn inner(&self) -> &EkfMl {
+        &self.inner
+    }
+
+    /// Resets the filter's position to (x, y) with standard deviation `sigma` (m), keeping the
+    /// rest (e.g. to start from an uncertain landing position).
+    pub fn reset_position(&mut self, x: f64, y: f64, sigma: f64) {
+        self.inner.reset_position(x, y, sigma);
+        self.previous = Point2::new(x, y);
+    }
+
+    /// The orbital counters.
+    pub fn orbital_stats(&self) -> OrbitalStats {
+        self.stats
+    }
+
+    /// Every orbital fix tried, in order.
+    pub fn fixes(&self) -> &[OrbitalFix] {
+        &self.fixes
+    }
+
+    /// The orbital map as used (after degradation).
+    pub fn orbital_map(&self) -> &Grid2<f32> {
+        &self.orbital
+    }
+
+    /// Tries an orbital fix; true when one was fused.
+    fn try_fix(&mut self) -> bool {
+        let p = self.params;
+        let before = self.inner.estimate();
+        let here = before.pose.pose2().position();
+        let crop = self.inner.map_heights(here, p.range_m, p.cell);
+        if crop.data.iter().filter(|h| h.is_finite()).count() < p.min_cells {
+            self.stats.not_matched += 1;
+            return false;
+        }
+        // The rover's map in a frame at the estimate with world-aligned axes: the match's pose
+        // is then the rover's position and its heading correction.
+        let g = crop.geometry;
+        let local = Grid2 {
+            geometry: GridGeometry { origin_x: g.origin_x - here.x, origin_y: g.origin_y - here.y, ..g },
+            data: crop.data,
+        };
+        let c = &before.covariance;
+        let half = |v: f64| (p.window_sigmas * v.max(0.0).sqrt()).clamp(p.min_window_m, p.max_window_m);
+        let window = SearchWindow {
+            center: Pose2::new(here.x, here.y, 0.0),
+            half_x: half(c[0][0]),
+            half_y: half(c[1][1]),
+            half_yaw: (p.window_sigmas * c[2][2].max(0.0).sqrt()).clamp(p.min_yaw, p.max_yaw),
+        };
+        let reach = p.range_m + window.half_x.max(window.half_y) + 6.0;
+        let reference = reference_around(&self.orbital, here.x, here.y, reach, p.cell);
+        self.stats.attempted += 1;
+        let Ok(m) = match_orbital(&local, &reference, &window, &p.orbital) else {
+            self.stats.not_matched += 1;
+            return false;
+        };
+        let mut fix = m;
+        fix.pose.yaw = rovernav_core::wrap_angle(before.pose.yaw + m.pose.yaw);
+        for row in fix.covariance.iter_mut() {
+            for v in row.iter_mut() {
+                *v *= p.covariance_scale;
+            }
+        }
+        let edge = 1.01 * p.cell;
+        let on_edge = (m.pose.x - here.x).abs() > window.half_x - edge
+            || (m.pose.y - here.y).abs() > window.half_y - edge;
+        let uncertain = m.failure_probability > p.max_failure_probability;
+        let gated = innovation_nees(&before, &fix).is_none_or(|d| d > p.gate);
+        let used = !uncertain && !on_edge && !gated && self.inner.fuse_absolute_fix(&fix);
+        self.fixes.push(OrbitalFix { before, fix, used, at_update: self.updates });
+        if used {
+            self.stats.used += 1;
+        } else if uncertain {
+            self.stats.rejected_uncertain += 1;
+        } else if on_edge {
+            self.stats.rejected_on_edge += 1;
+        } else {
+            self.stats.rejected_gate += 1;
+        }
+        used
+    }
+}
+
+/// The position innovation's squared Mahalanobis length against the sum of the estimate's and
+/// the fix's position covariances; `None` when that sum is singular.
+pub fn innovation_nees(estimate: &PoseEstimate, fix: &MatchResult) -> Option<f64> {
+    let (p, r) = (&estimate.covariance, &fix.covariance);
+    let s = [[p[0][0] + r[0][0], p[0][1] + r[0][1]], [p[1][0] + r[1][0], p[1][1] + r[1][1]]];
+    let (ex, ey) = (fix.pose.x - estimate.pose.x, fix.pose.y - estimate.pose.y);
+    let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+    (det > 0.0).then(|| (s[1][1] * ex * ex - (s[0][1] + s[1][0]) * ex * ey + s[0][0] * ey * ey) / det)
 }
 
 impl Localizer for OrbitalMapLocalizer {
@@ -115,73 +296,65 @@ impl Localizer for OrbitalMapLocalizer {
     }
 
     fn reset(&mut self, pose: Pose3) {
-        self.ekf.reset(pose);
+        self.inner.reset(pose);
+        self.travel = 0.0;
+        self.previous = Point2::new(pose.x, pose.y);
     }
 
     fn update(&mut self, frame: &SensorFrame) {
-        self.ekf.update(frame);
-        if frame.clouds.iter().filter(|c| !c.points.is_empty()).count() >= self.params.min_wedges {
-            self.try_fix(frame);
+        self.updates += 1;
+        self.inner.update(frame);
+        let here = self.inner.estimate().pose.pose2().position();
+        let step = here.dist(self.previous);
+        if step.is_finite() {
+            self.travel += step;
+        }
+        self.previous = here;
+        let clouds = frame.clouds.iter().filter(|c| !c.points.is_empty()).count();
+        let panorama = clouds >= self.params.min_wedges;
+        if clouds > 0 && self.travel >= self.params.fix_interval_m - self.params.fix_lead_m {
+            self.side_looks += 1;
+        }
+        if panorama || (clouds > 0 && self.travel >= self.params.fix_interval_m) {
+            if self.try_fix() {
+                (self.travel, self.side_looks, self.retries) = (0.0, 0, 0);
+            } else if !panorama && self.retries < self.params.max_retries {
+                self.retries += 1;
+                self.travel = self.params.fix_interval_m - self.params.retry_interval_m;
+            } else if !panorama {
+                (self.travel, self.side_looks, self.retries) = (0.0, 0, 0);
+            }
+            self.previous = self.inner.estimate().pose.pose2().position();
+        }
+    }
+
+    fn localization_target(&self) -> Option<f64> {
+        if self.travel >= self.params.fix_interval_m - self.params.fix_lead_m {
+            Some(SIDE_PANS[self.side_looks % SIDE_PANS.len()])
+        } else {
+            self.inner.localization_target()
         }
     }
 
     fn estimate(&self) -> PoseEstimate {
-        self.ekf.estimate()
+        self.inner.estimate()
     }
 
     fn stats(&self) -> LocalizerStats {
-        let e = self.ekf.stats();
+        let (i, o) = (self.inner.stats(), self.stats);
+        let e = self.inner.ekf().stats();
         LocalizerStats {
+            matches_attempted: i.matches_attempted + o.attempted,
+            fixes_used: i.fixes_used + o.used,
+            fixes_rejected: i.fixes_rejected + o.attempted - o.used,
+            rejected_uncertain: i.rejected_uncertain + o.rejected_uncertain,
+            rejected_on_edge: i.rejected_on_edge + o.rejected_on_edge,
             zero_velocity_updates: e.zero_updates,
             slip_corrections: e.slip_corrections,
-            ..self.stats
         }
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::orbital::degrade;
-    use crate::synthetic::{StereoModel, TerrainParams, fractal_terrain, stereo_points};
-    use rovernav_core::{CameraKind, PointCloud, Wedge};
-
-    /// A rover whose estimate is 1.4 m off: the first panorama matched against the terrain's
-    /// 1 m orbital map brings it within 0.5 m of the truth, with a fix counted as used.
-    #[test]
-    fn a_panorama_pulls_a_wrong_estimate_to_the_truth() {
-        let params = TerrainParams { size: 50.0, resolution: 0.1, relief: 0.8, ..TerrainParams::default() };
-        let terrain = fractal_terrain(&params, 7);
-        let orbital = degrade(&terrain.heights, 1.0);
-        let truth = Pose3 { x: 1.0, y: -2.0, yaw: 0.4, ..Default::default() };
-        let clouds: Vec<PointCloud> = (0..8)
-            .map(|k| {
-                let bearing = k as f64 * std::f64::consts::FRAC_PI_4;
-                let model = StereoModel {
-                    bearing,
-                    fov: 50f64.to_radians(),
-                    max_range: 12.0,
-                    ray_spacing: 0.1,
-                    ..StereoModel::default()
-                };
-                PointCloud {
-                    camera: CameraKind::Mast,
-                    origin: [0.0, 0.0, 1.2],
-                    wedge: Wedge { bearing, half_angle: 25f64.to_radians(), min_range: 1.0, max_range: 12.0 },
-                    points: stereo_points(&terrain, &truth, &model, 100 + k),
-                }
-            })
-            .collect();
-        let start = Pose3 { x: truth.x + 1.2, y: truth.y - 0.7, ..truth };
-        let mut loc =
-            OrbitalMapLocalizer::new(&RoverConfig::default(), start, orbital, OrbitalMapParams::default());
-        loc.ekf_mut().reset_position(start.x, start.y, 1.5);
-        loc.update(&SensorFrame { clouds, ..SensorFrame::default() });
-        let e = loc.estimate().pose;
-        assert!((e.x - truth.x).hypot(e.y - truth.y) < 0.5, "estimate {e:?}, {:?}", loc.stats());
-        assert_eq!(loc.stats().fixes_used, 1);
-        // A frame without a panorama leaves the estimate alone.
-        loc.update(&SensorFrame::default());
-        assert_eq!(loc.stats().matches_attempted, 1);
-    }
-}
+#[path = "orbital_map_tests.rs"]
+mod tests;

@@ -145,6 +145,11 @@ pub enum NavigatorError {
         /// The valid range.
         expected: &'static str,
     },
+    /// The localiser needs a prior map (an orbital map) that the run does not give.
+    MissingPriorMap {
+        /// Registry name.
+        localizer: String,
+    },
 }
 
 impl fmt::Display for NavigatorError {
@@ -177,6 +182,10 @@ impl fmt::Display for NavigatorError {
             NavigatorError::InvalidParam { kind, navigator, param, value, expected } => {
                 write!(f, "parameter `{param}` of {kind} `{navigator}` is {value}, expected {expected}")
             }
+            NavigatorError::MissingPriorMap { localizer } => write!(
+                f,
+                "localizer `{localizer}` needs an orbital map of the terrain, which this run does not give"
+            ),
         }
     }
 }

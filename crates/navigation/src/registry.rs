@@ -17,7 +17,7 @@
 
 use crate::look_back::{LOOK_BACK_SUFFIX, LookBack};
 use crate::params::{NavigatorError, NavigatorParams, Param, configured, value};
-use rovernav_core::{Localizer, Navigator, Pose3, RoverConfig};
+use rovernav_core::{Grid2, Localizer, Navigator, Pose3, RoverConfig};
 use std::sync::OnceLock;
 
 /// One parameter an entry takes in a mission's `[navigator_params]` or `[localizer_params]`.
@@ -118,6 +118,9 @@ pub struct LocalizerBuild<'a> {
     pub initial: Pose3,
     /// The mission's `[localizer_params]` (an alias's included).
     pub params: &'a NavigatorParams,
+    /// The terrain's orbital map given before the traverse (world frame, heights in metres,
+    /// NaN unknown), for localisers that match against one; `None` when the run has none.
+    pub prior_map: Option<&'a Grid2<f32>>,
 }
 
 impl LocalizerBuild<'_> {
@@ -136,6 +139,8 @@ pub struct LocalizerEntry {
     pub doc: &'static str,
     /// Whether it corrects its pose by terrain-map matching (so the navigator looks back).
     pub matches_terrain: bool,
+    /// Whether it needs the terrain's orbital map ([`LocalizerBuild::prior_map`]).
+    pub needs_prior_map: bool,
     /// Its parameters with their defaults.
     pub params: fn() -> Vec<ParamInfo>,
     /// Its constructor.
@@ -407,13 +412,31 @@ impl Registry {
         }
     }
 
-    /// A localiser by name (see [`Registry::localizer`]) starting at `initial`.
+    /// A localiser by name (see [`Registry::localizer`]) starting at `initial`, without a prior
+    /// map.
     pub fn build_localizer(
         &self,
         name: &str,
         rover: &RoverConfig,
         initial: Pose3,
         params: &NavigatorParams,
+    ) -> Result<Box<dyn Localizer>, NavigatorError> {
+        self.build_localizer_with_prior(name, rover, initial, params, None)
+    }
+
+    /// Whether the localiser `name` needs an orbital map (false for an unknown name).
+    pub fn localizer_needs_prior_map(&self, name: &str) -> bool {
+        self.localizer(name, &NavigatorParams::new()).is_ok_and(|c| c.entry.needs_prior_map)
+    }
+
+    /// [`Registry::build_localizer`] with the terrain's orbital map when the run has one.
+    pub fn build_localizer_with_prior(
+        &self,
+        name: &str,
+        rover: &RoverConfig,
+        initial: Pose3,
+        params: &NavigatorParams,
+        prior_map: Option<&Grid2<f32>>,
     ) -> Result<Box<dyn Localizer>, NavigatorError> {
         let choice = self.localizer(name, params)?;
         let known: Vec<&'static str> = (choice.entry.params)().iter().map(|p| p.name).collect();
@@ -426,13 +449,23 @@ impl Registry {
                 known,
             });
         }
-        let build = LocalizerBuild { name: choice.entry.name, rover, initial, params: &choice.params };
+        if choice.entry.needs_prior_map && prior_map.is_none() {
+            return Err(NavigatorError::MissingPriorMap { localizer: choice.entry.name.to_string() });
+        }
+        let build =
+            LocalizerBuild { name: choice.entry.name, rover, initial, params: &choice.params, prior_map };
         (choice.entry.build)(&build)
     }
 
-    /// Checks a localiser's name and parameters without keeping the localiser.
+    /// Checks a localiser's name and parameters without keeping the localiser (one that needs
+    /// an orbital map is built on a small flat stand-in: the run gives the real one).
     pub fn check_localizer(&self, name: &str, params: &NavigatorParams) -> Result<(), NavigatorError> {
-        self.build_localizer(name, &RoverConfig::default(), Pose3::default(), params).map(drop)
+        let geometry =
+            rovernav_core::GridGeometry { cols: 4, rows: 4, resolution: 1.0, origin_x: -2.0, origin_y: -2.0 };
+        let stand_in = Grid2::filled(geometry, 0.0f32);
+        let initial = Pose3::default();
+        self.build_localizer_with_prior(name, &RoverConfig::default(), initial, params, Some(&stand_in))
+            .map(drop)
     }
 }
 

@@ -84,7 +84,8 @@ fn unknown_names_and_planners_are_one_line_errors_listing_the_known_ones() {
     assert!(err.contains("`dstar-lite`") && err.contains("`astar`"), "{err}");
     assert!(r.navigator("mrpta", Some("dstar-lite")).is_ok());
     let err = r.localizer("gps", &NavigatorParams::new()).err().unwrap().to_string();
-    assert!(!err.contains('\n') && err.contains("dead-reckoning, ekf, ekf-ml, ekf-ml-targets"), "{err}");
+    let known = "dead-reckoning, ekf, ekf-ml, orbital-map, ekf-ml-targets";
+    assert!(!err.contains('\n') && err.contains(known), "{err}");
     let err = r.check_localizer("ekf", &[("min_travel_m".to_string(), 1.0)].into()).unwrap_err().to_string();
     assert!(err.contains("localizer `ekf` takes no parameters"), "{err}");
     let err = r.check_localizer("ekf-ml", &[("min_travel_m".to_string(), -1.0)].into()).unwrap_err();
@@ -137,8 +138,13 @@ fn the_localizer_alias_is_ekf_ml_with_target_selection_and_specs_round_trip() {
         r.build_localizer("ekf-ml-targets", &rover, Pose3::default(), &NavigatorParams::new()).unwrap();
     assert_eq!(built.name(), "ekf-ml-targets");
     let old = EkfMlParams { select_targets: true, ..Default::default() };
-    let b =
-        LocalizerBuild { name: "ekf-ml", rover: &rover, initial: Pose3::default(), params: &alias.params };
+    let b = LocalizerBuild {
+        name: "ekf-ml",
+        rover: &rover,
+        initial: Pose3::default(),
+        params: &alias.params,
+        prior_map: None,
+    };
     assert_eq!(b.configured(EkfMlParams::default(), &crate::localizers::ekf_ml_params()).unwrap(), old);
     // Parameters without an alias travel in the spec and come back.
     let other = r.localizer("ekf-ml", &[("min_travel_m".to_string(), 2.5)].into()).unwrap();
@@ -149,12 +155,35 @@ fn the_localizer_alias_is_ekf_ml_with_target_selection_and_specs_round_trip() {
         let l = r.build_localizer(name, &rover, Pose3::default(), &NavigatorParams::new()).unwrap();
         assert_eq!(l.name(), name);
     }
-    // The localisation crate's name-only builder agrees with the registry on every name.
-    for name in r.localizer_names() {
+    // The localisation crate's name-only builder agrees with the registry on every name that
+    // needs no orbital map.
+    for name in r.localizer_names().into_iter().filter(|n| !r.localizer_needs_prior_map(n)) {
         let direct = rovernav_localization::localizer_by_name(name, &rover, Pose3::default());
         assert_eq!(direct.map(|l| l.name().to_string()).as_deref(), Some(name), "{name}");
     }
     assert!(rovernav_localization::localizer_by_name("gps", &rover, Pose3::default()).is_none());
+}
+
+#[test]
+fn the_orbital_map_localizer_needs_a_prior_map_and_builds_with_one() {
+    let r = Registry::builtin();
+    let rover = RoverConfig::default();
+    assert!(r.localizer_needs_prior_map("orbital-map"));
+    assert!(!r.localizer_needs_prior_map("ekf-ml"));
+    let none = r.build_localizer("orbital-map", &rover, Pose3::default(), &NavigatorParams::new());
+    let err = none.err().expect("no prior map, no localiser").to_string();
+    assert!(err.contains("orbital-map") && err.contains("orbital map"), "{err}");
+    // A mission's checks pass on a stand-in map; parameters are checked as for any localiser.
+    assert!(r.check_localizer("orbital-map", &[("fix_interval_m".to_string(), 50.0)].into()).is_ok());
+    let bad = r.check_localizer("orbital-map", &[("fix_interval_m".to_string(), -1.0)].into());
+    assert_eq!(bad.err().and_then(|e| e.param().map(str::to_string)).as_deref(), Some("fix_interval_m"));
+    let geometry =
+        rovernav_core::GridGeometry { cols: 20, rows: 20, resolution: 1.0, origin_x: -10.0, origin_y: -10.0 };
+    let map = rovernav_core::Grid2::filled(geometry, 0.0f32);
+    let params = NavigatorParams::new();
+    let built = r.build_localizer_with_prior("orbital-map", &rover, Pose3::default(), &params, Some(&map));
+    assert_eq!(built.map(|l| l.name().to_string()).ok().as_deref(), Some("orbital-map"));
+    assert_eq!(r.decorated("astar-grid", "orbital-map"), "astar-grid+look-back");
 }
 
 #[test]
