@@ -1,292 +1,295 @@
-//! SVG charts of a campaign, written by hand (a few lines and circles do not need a plotting
-//! crate): success against rock abundance, and the path-ratio distribution per navigator.
+//! SVG charts of a campaign, drawn with plotters (through `rovernav-viz`, in its embedded font):
+//! success against rock abundance with 95 % Wilson intervals, and the path-ratio distribution per
+//! navigator with the median and p95 that `summary.md` gives ([`crate::summary::median`] and
+//! [`crate::summary::percentile`], read from the summary itself).
+//!
+//! Labels under the x axis are laid out from their measured text extents ([`label_rows`]): a
+//! label that would overlap its neighbour moves to the next row, so none collide.
 
 use crate::row::Row;
-use crate::summary::{Summary, percentile};
-use std::fmt::Write;
+use crate::summary::{Summary, Z95, wilson};
+use rovernav_viz::font;
+use rovernav_viz::plotters::coord::Shift;
+use rovernav_viz::plotters::prelude::*;
+use rovernav_viz::plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// Chart size (px).
-const WIDTH: f64 = 760.0;
-const HEIGHT: f64 = 440.0;
-/// Plot area (px).
-const LEFT: f64 = 70.0;
-const RIGHT: f64 = 560.0;
-const TOP: f64 = 50.0;
-const BOTTOM: f64 = 370.0;
+const SIZE: (u32, u32) = (900, 500);
+/// Width of the legend column on the right (px).
+const LEGEND_W: u32 = 250;
+/// Plot margins: left (y labels), top (title), bottom (x labels).
+const LEFT: u32 = 70;
+const TOP: u32 = 44;
+const BOTTOM: u32 = 96;
 
 /// Distinguishable colours (Okabe-Ito, then greys) for up to ten navigators.
-const PALETTE: [&str; 10] = [
-    "#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#000000", "#F0E442", "#999999",
-    "#7F3C8D",
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(0x00, 0x72, 0xB2),
+    RGBColor(0xE6, 0x9F, 0x00),
+    RGBColor(0x00, 0x9E, 0x73),
+    RGBColor(0xCC, 0x79, 0xA7),
+    RGBColor(0xD5, 0x5E, 0x00),
+    RGBColor(0x56, 0xB4, 0xE9),
+    RGBColor(0x00, 0x00, 0x00),
+    RGBColor(0xF0, 0xE4, 0x42),
+    RGBColor(0x99, 0x99, 0x99),
+    RGBColor(0x7F, 0x3C, 0x8D),
 ];
 
-fn colour(i: usize) -> &'static str {
+fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
-/// Escapes text for SVG.
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+fn text(size: f64) -> TextStyle<'static> {
+    FontDesc::new(font::family(), size, FontStyle::Normal).color(&BLACK)
 }
 
-fn open(title: &str) -> String {
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{WIDTH}\" height=\"{HEIGHT}\" viewBox=\"0 0 {WIDTH} {HEIGHT}\" \
-         font-family=\"sans-serif\" font-size=\"12\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
-         <text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">{}</text>\n",
-        (LEFT + RIGHT) / 2.0,
-        esc(title)
-    )
+/// Text width in `style`'s font (px).
+fn width_of(s: &str, size: f64) -> f64 {
+    FontDesc::new(font::family(), size, FontStyle::Normal)
+        .box_size(s)
+        .map_or(7.0 * s.len() as f64, |(w, _)| w as f64)
 }
 
-/// Horizontal grid lines and labels for `ticks` (value, label) on a y scale.
-fn y_axis(s: &mut String, ticks: &[(f64, String)], y: impl Fn(f64) -> f64, label: &str) {
-    for (v, text) in ticks {
-        let py = y(*v);
-        let _ = writeln!(
-            s,
-            "<line x1=\"{LEFT}\" y1=\"{py:.1}\" x2=\"{RIGHT}\" y2=\"{py:.1}\" stroke=\"#ddd\"/>\
-             <text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
-            LEFT - 6.0,
-            py + 4.0,
-            esc(text)
-        );
+/// Rows for labels centred at `centres` (px) with `widths` (px): each label takes the first row
+/// in which it clears every label already placed there by `gap` px.
+pub fn label_rows(centres: &[f64], widths: &[f64], gap: f64) -> Vec<usize> {
+    let mut rows: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut out = Vec::with_capacity(centres.len());
+    for (&c, &w) in centres.iter().zip(widths) {
+        let (a, b) = (c - w / 2.0, c + w / 2.0);
+        let free = |row: &Vec<(f64, f64)>| row.iter().all(|&(x0, x1)| b + gap <= x0 || a >= x1 + gap);
+        let k = rows.iter().position(free).unwrap_or(rows.len());
+        if k == rows.len() {
+            rows.push(Vec::new());
+        }
+        rows[k].push((a, b));
+        out.push(k);
     }
-    let _ = writeln!(
-        s,
-        "<rect x=\"{LEFT}\" y=\"{TOP}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n\
-         <text transform=\"translate(18 {:.1}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
-        RIGHT - LEFT,
-        BOTTOM - TOP,
-        (TOP + BOTTOM) / 2.0,
-        esc(label)
-    );
+    out
 }
 
-fn legend(s: &mut String, names: &[&str]) {
-    for (i, name) in names.iter().enumerate() {
-        let y = TOP + 10.0 + 20.0 * i as f64;
-        let _ = writeln!(
-            s,
-            "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"14\" height=\"14\" fill=\"{}\"/>\
-             <text x=\"{:.1}\" y=\"{:.1}\">{}</text>",
-            RIGHT + 20.0,
-            y - 11.0,
-            colour(i),
-            RIGHT + 40.0,
-            y,
-            esc(name)
-        );
-    }
-}
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+type Drawn = Result<(), DrawingAreaErrorKind<std::io::Error>>;
 
-/// Success rate of each navigator against rock abundance, with each bin's run count.
-pub fn success_vs_rock_abundance(summary: &Summary) -> String {
-    let mut s = open(&format!("Success against rock abundance — campaign {}", summary.campaign));
-    let bins = &summary.by_rock_abundance;
-    let centres: Vec<f64> = bins.iter().map(|b| (b.lo + b.hi) / 2.0).collect();
-    let (mut x0, mut x1) = (
-        centres.iter().copied().fold(f64::INFINITY, f64::min),
-        centres.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    );
-    if !x0.is_finite() {
-        (x0, x1) = (0.0, 0.2);
-    }
-    let pad = if x1 > x0 { 0.08 * (x1 - x0) } else { 0.02 };
-    let (x0, x1) = ((x0 - pad).max(0.0), x1 + pad);
-    let x = |v: f64| LEFT + (v - x0) / (x1 - x0) * (RIGHT - LEFT);
-    let y = |v: f64| BOTTOM - v * (BOTTOM - TOP);
-    let ticks: Vec<(f64, String)> = (0..=4).map(|i| (i as f64 / 4.0, format!("{} %", 25 * i))).collect();
-    y_axis(&mut s, &ticks, y, "success (reached, no hazard contact)");
-    for (b, c) in bins.iter().zip(&centres) {
-        let px = x(*c);
-        let _ = writeln!(
-            s,
-            "<line x1=\"{px:.1}\" y1=\"{BOTTOM}\" x2=\"{px:.1}\" y2=\"{:.1}\" stroke=\"#333\"/>\
-             <text x=\"{px:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{c:.3}</text>\
-             <text x=\"{px:.1}\" y=\"{:.1}\" text-anchor=\"middle\" fill=\"#777\" font-size=\"10\">n={}</text>",
-            BOTTOM + 5.0,
-            BOTTOM + 18.0,
-            BOTTOM + 31.0,
-            b.terrains
-        );
-    }
-    let _ = writeln!(
-        s,
-        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">rock abundance k (bin centre; n = terrains)</text>",
-        (LEFT + RIGHT) / 2.0,
-        BOTTOM + 52.0
-    );
-    let count = summary.navigators.len() as f64;
-    for (i, nav) in summary.navigators.iter().enumerate() {
-        // Navigators with equal rates would hide each other: shift each a few pixels sideways.
-        let dodge = (i as f64 - (count - 1.0) / 2.0) * 3.0;
-        let pts: Vec<(f64, f64)> = bins
-            .iter()
-            .zip(&centres)
-            .filter(|(b, _)| b.per_navigator[i][0] > 0)
-            .map(|(b, c)| (x(*c) + dodge, y(b.per_navigator[i][1] as f64 / b.per_navigator[i][0] as f64)))
-            .collect();
-        let path: Vec<String> = pts.iter().map(|(a, b)| format!("{a:.1},{b:.1}")).collect();
-        let _ = writeln!(
-            s,
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"><title>{}</title></polyline>",
-            path.join(" "),
-            colour(i),
-            esc(&nav.navigator)
-        );
-        for (a, b) in pts {
-            let _ = writeln!(s, "<circle cx=\"{a:.1}\" cy=\"{b:.1}\" r=\"3.5\" fill=\"{}\"/>", colour(i));
+/// Draws labels centred at `centres` under the plot, stacked by [`label_rows`]; each label is
+/// one or more lines.
+fn x_labels(area: &Area<'_>, centres: &[f64], labels: &[Vec<String>], y: i32) -> Drawn {
+    const SIZE: f64 = 12.0;
+    const LINE: i32 = 15;
+    let widths: Vec<f64> =
+        labels.iter().map(|l| l.iter().map(|s| width_of(s, SIZE)).fold(0.0, f64::max)).collect();
+    let rows = label_rows(centres, &widths, 6.0);
+    let height = labels.iter().map(|l| l.len() as i32).max().unwrap_or(1) * LINE + 4;
+    for ((c, lines), row) in centres.iter().zip(labels).zip(rows) {
+        for (k, line) in lines.iter().enumerate() {
+            let pos = (*c as i32, y + row as i32 * height + k as i32 * LINE);
+            let style = text(SIZE).pos(Pos::new(HPos::Center, VPos::Top));
+            area.draw(&Text::new(
+                line.clone(),
+                pos,
+                if k == 0 { style } else { style.color(&RGBColor(90, 90, 90)) },
+            ))?;
         }
     }
-    let names: Vec<&str> = summary.navigators.iter().map(|n| n.navigator.as_str()).collect();
-    legend(&mut s, &names);
-    s.push_str("</svg>\n");
-    s
+    Ok(())
+}
+
+/// Legend entries at the right: a swatch and a line of words per navigator, then any further
+/// lines of that entry in grey.
+fn legend(area: &Area<'_>, entries: &[(RGBColor, Vec<String>)], notes: &[&str]) -> Drawn {
+    let x = (SIZE.0 - LEGEND_W + 16) as i32;
+    let mut y = TOP as i32 + 4;
+    for (c, lines) in entries {
+        area.draw(&Rectangle::new([(x, y), (x + 14, y + 14)], c.filled()))?;
+        for (k, words) in lines.iter().enumerate() {
+            let style = if k == 0 { text(12.0) } else { text(11.0).color(&RGBColor(90, 90, 90)) };
+            area.draw(&Text::new(words.clone(), (x + 22, y), style))?;
+            y += 16;
+        }
+        y += 6;
+    }
+    for n in notes {
+        y += 4;
+        area.draw(&Text::new(n.to_string(), (x, y), text(11.0).color(&RGBColor(80, 80, 80))))?;
+        y += 14;
+    }
+    Ok(())
+}
+
+fn render(draw: impl FnOnce(&Area<'_>) -> Drawn) -> String {
+    font::ensure();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        // Drawing into a string cannot fail but for a missing font, which is embedded.
+        let _ = root.fill(&WHITE).and_then(|_| draw(&root)).and_then(|_| root.present());
+    }
+    svg
+}
+
+fn title(area: &Area<'_>, words: &str) -> Drawn {
+    let x = ((SIZE.0 - LEGEND_W) / 2) as i32;
+    area.draw(&Text::new(words.to_string(), (x, 14), text(16.0).pos(Pos::new(HPos::Center, VPos::Top))))
+}
+
+fn plot_area<'a>(root: &Area<'a>) -> Area<'a> {
+    let (plot, _) = root.split_horizontally(SIZE.0 - LEGEND_W);
+    plot.margin(TOP, BOTTOM, 0, 12)
+}
+
+/// Success rate of each navigator against rock abundance with its 95 % Wilson interval, each
+/// bin's run count under its centre, and each navigator's overall rate and interval in the legend.
+pub fn success_vs_rock_abundance(summary: &Summary) -> String {
+    render(|root| {
+        title(root, &format!("Success against rock abundance — campaign {}", summary.campaign))?;
+        let bins = &summary.by_rock_abundance;
+        let centres: Vec<f64> = bins.iter().map(|b| (b.lo + b.hi) / 2.0).collect();
+        let lo = centres.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = centres.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.2) };
+        let pad = if hi > lo { 0.1 * (hi - lo) } else { 0.02 };
+        let area = plot_area(root);
+        let mut chart = ChartBuilder::on(&area)
+            .y_label_area_size(LEFT)
+            .build_cartesian_2d(lo - pad..hi + pad, 0.0..1.0)?;
+        let pct = |v: &f64| format!("{:.0} %", v * 100.0);
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .y_labels(5)
+            .y_label_formatter(&pct)
+            .y_desc("success (reached, no hazard contact)")
+            .label_style(text(12.0))
+            .axis_desc_style(text(13.0))
+            .draw()?;
+        let count = summary.navigators.len().max(1) as f64;
+        let spacing = if centres.len() > 1 { (hi - lo) / (centres.len() - 1) as f64 } else { 2.0 * pad };
+        for i in 0..summary.navigators.len() {
+            // Side by side within a bin so that equal rates and their intervals stay apart.
+            let dodge = (i as f64 - (count - 1.0) / 2.0) * 0.5 * spacing / count;
+            let c = colour(i);
+            let mut pts = Vec::new();
+            for (b, x) in bins.iter().zip(&centres) {
+                let [n, s] = b.per_navigator[i];
+                let Some([a, z]) = wilson(s, n, Z95) else { continue };
+                let x = x + dodge;
+                pts.push((x, s as f64 / n as f64));
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(x, a), (x, z)],
+                    c.stroke_width(1),
+                )))?;
+                for end in [a, z] {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at((x, end)) + PathElement::new(vec![(-4, 0), (4, 0)], c),
+                    ))?;
+                }
+            }
+            chart.draw_series(std::iter::once(PathElement::new(pts.clone(), c.stroke_width(2))))?;
+            chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, c.filled())))?;
+        }
+        let px: Vec<f64> = centres.iter().map(|&x| chart.backend_coord(&(x, 0.0)).0 as f64).collect();
+        let y = chart.backend_coord(&(lo, 0.0)).1 + 8;
+        let labels: Vec<Vec<String>> = bins
+            .iter()
+            .zip(&centres)
+            .map(|(b, c)| vec![format!("{c:.3}"), format!("n={}", b.terrains)])
+            .collect();
+        x_labels(root, &px, &labels, y)?;
+        let x_mid = ((SIZE.0 - LEGEND_W) / 2) as i32;
+        root.draw(&Text::new(
+            "rock abundance k (bin centre; n = terrains)",
+            (x_mid, SIZE.1 as i32 - 20),
+            text(13.0).pos(Pos::new(HPos::Center, VPos::Top)),
+        ))?;
+        let lines: Vec<(RGBColor, Vec<String>)> = summary
+            .navigators
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                let rate = n.success_rate.map_or("–".into(), |r| format!("{:.0} %", 100.0 * r));
+                let ci = n
+                    .success_ci95
+                    .map_or(String::new(), |[a, b]| format!(" [{:.0}, {:.0}]", 100.0 * a, 100.0 * b));
+                (colour(i), vec![format!("{} {rate}{ci}", n.navigator)])
+            })
+            .collect();
+        legend(root, &lines, &["bars: 95 % Wilson interval", "legend: overall rate [95 % CI]"])
+    })
 }
 
 /// Path ratio (distance driven / optimal) of every reached run, one column per navigator, with
-/// the median (bar) and the 95th percentile (tick).
+/// the median (long bar) and the p95 (short bar) as `summary.md` gives them.
 pub fn path_ratio(summary: &Summary, rows: &[Row]) -> String {
-    let mut s = open(&format!("Path ratio of reached runs — campaign {}", summary.campaign));
-    let per_nav: Vec<Vec<f64>> = summary
-        .navigators
-        .iter()
-        .map(|n| rows.iter().filter(|r| r.navigator == n.navigator).filter_map(|r| r.path_ratio).collect())
-        .collect();
-    let all = per_nav.iter().flatten().copied();
-    let lo = all.clone().fold(1.0f64, f64::min);
-    let hi = all.fold(1.2f64, f64::max);
-    let (y0, y1) = ((lo - 0.05).max(0.0), hi + 0.05 * (hi - lo).max(0.2));
-    let y = |v: f64| BOTTOM - (v - y0) / (y1 - y0) * (BOTTOM - TOP);
-    let step = nice_step((y1 - y0) / 6.0);
-    let ticks: Vec<(f64, String)> = (0..)
-        .map(|k| (y0 / step).ceil() * step + k as f64 * step)
-        .take_while(|v| *v <= y1)
-        .map(|v| (v, format!("{v:.2}")))
-        .collect();
-    y_axis(&mut s, &ticks, y, "distance driven / optimal length");
-    let _ = writeln!(
-        s,
-        "<line x1=\"{LEFT}\" y1=\"{0:.1}\" x2=\"{RIGHT}\" y2=\"{0:.1}\" stroke=\"#333\" stroke-dasharray=\"5 4\"/>\
-         <text x=\"{1:.1}\" y=\"{2:.1}\" text-anchor=\"end\" fill=\"#333\" font-size=\"10\">optimal</text>",
-        y(1.0),
-        RIGHT - 4.0,
-        y(1.0) - 4.0
-    );
-    let n = per_nav.len().max(1) as f64;
-    let band = (RIGHT - LEFT) / n;
-    for (i, (nav, ratios)) in summary.navigators.iter().zip(&per_nav).enumerate() {
-        let cx = LEFT + band * (i as f64 + 0.5);
-        // Alternate label rows so that long names in narrow columns do not run together.
-        let row = 14.0 * (i % 2) as f64;
-        let _ = writeln!(
-            s,
-            "<text x=\"{cx:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-size=\"11\">{} <tspan fill=\"#777\" font-size=\"10\">n={}</tspan></text>",
-            BOTTOM + 16.0 + row,
-            esc(&nav.navigator),
-            ratios.len()
-        );
-        for (k, r) in ratios.iter().enumerate() {
-            // Golden-ratio jitter: spreads the dots evenly and is the same on every run.
-            let dx = ((k as f64 * 0.618_034).fract() - 0.5) * band * 0.5;
-            let _ = writeln!(
-                s,
-                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\" fill=\"{}\" fill-opacity=\"0.6\"/>",
-                cx + dx,
-                y(*r),
-                colour(i)
-            );
-        }
-        for (q, w, label) in [(0.5, 0.35, "median"), (0.95, 0.2, "p95")] {
-            if let Some(v) = percentile(ratios, q) {
-                let half = band * w;
-                let _ = writeln!(
-                    s,
-                    "<line x1=\"{a:.1}\" y1=\"{py:.1}\" x2=\"{b:.1}\" y2=\"{py:.1}\" stroke=\"#000\" stroke-width=\"2\"><title>{label} {v:.3}</title></line>",
-                    a = cx - half,
-                    py = y(v),
-                    b = cx + half
-                );
+    render(|root| {
+        title(root, &format!("Path ratio of reached runs — campaign {}", summary.campaign))?;
+        let per_nav: Vec<Vec<f64>> = summary
+            .navigators
+            .iter()
+            .map(|n| {
+                rows.iter().filter(|r| r.navigator == n.navigator).filter_map(|r| r.path_ratio).collect()
+            })
+            .collect();
+        let all = per_nav.iter().flatten().copied();
+        let lo = all.clone().fold(1.0f64, f64::min);
+        let hi = all.fold(1.2f64, f64::max);
+        let (y0, y1) = ((lo - 0.05).max(0.0), hi + 0.05 * (hi - lo).max(0.2));
+        let n = per_nav.len().max(1);
+        let area = plot_area(root);
+        let mut chart =
+            ChartBuilder::on(&area).y_label_area_size(LEFT).build_cartesian_2d(0.0..n as f64, y0..y1)?;
+        let fmt = |v: &f64| format!("{v:.2}");
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .y_labels(7)
+            .y_label_formatter(&fmt)
+            .y_desc("distance driven / optimal length")
+            .label_style(text(12.0))
+            .axis_desc_style(text(13.0))
+            .draw()?;
+        let dash = DashedLineSeries::new(vec![(0.0, 1.0), (n as f64, 1.0)], 5, 4, BLACK.into());
+        chart.draw_series(dash)?;
+        let mut entries = Vec::new();
+        for (i, (nav, ratios)) in summary.navigators.iter().zip(&per_nav).enumerate() {
+            let cx = i as f64 + 0.5;
+            for (k, r) in ratios.iter().enumerate() {
+                // Golden-ratio jitter: spreads the dots evenly and is the same on every run.
+                let dx = ((k as f64 * 0.618_034).fract() - 0.5) * 0.5;
+                chart.draw_series(std::iter::once(Circle::new(
+                    (cx + dx, *r),
+                    3,
+                    colour(i).mix(0.6).filled(),
+                )))?;
             }
+            for (v, half) in [(nav.path_ratio_median, 0.35), (nav.path_ratio_p95, 0.2)] {
+                if let Some(v) = v {
+                    chart.draw_series(std::iter::once(PathElement::new(
+                        vec![(cx - half, v), (cx + half, v)],
+                        BLACK.stroke_width(2),
+                    )))?;
+                }
+            }
+            let stats = match (nav.path_ratio_median, nav.path_ratio_p95) {
+                (Some(m), Some(p)) => format!("n={} · median {m:.3} · p95 {p:.3}", ratios.len()),
+                _ => "no reached run".to_string(),
+            };
+            entries.push((colour(i), vec![nav.navigator.clone(), stats]));
         }
-    }
-    let _ = writeln!(
-        s,
-        "<text x=\"{:.1}\" y=\"{:.1}\">long bar: median</text><text x=\"{0:.1}\" y=\"{:.1}\">short bar: p95</text>",
-        RIGHT + 20.0,
-        TOP + 10.0,
-        TOP + 28.0
-    );
-    s.push_str("</svg>\n");
-    s
-}
-
-/// A round tick step (1, 2 or 5 times a power of ten) near `raw`.
-fn nice_step(raw: f64) -> f64 {
-    let p = 10f64.powf(raw.max(1e-9).log10().floor());
-    let m = raw / p;
-    p * if m < 1.5 {
-        1.0
-    } else if m < 3.5 {
-        2.0
-    } else if m < 7.5 {
-        5.0
-    } else {
-        10.0
-    }
+        let px: Vec<f64> = (0..n).map(|i| chart.backend_coord(&(i as f64 + 0.5, y0)).0 as f64).collect();
+        let y = chart.backend_coord(&(0.0, y0)).1 + 8;
+        let labels: Vec<Vec<String>> = summary.navigators.iter().map(|n| vec![n.navigator.clone()]).collect();
+        x_labels(root, &px, &labels, y)?;
+        legend(
+            root,
+            &entries,
+            &["long bar: median (as summary.md)", "short bar: p95 (nearest rank)", "dashed: optimal (1.0)"],
+        )
+    })
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::output::CampaignMeta;
-    use crate::row::tests::row;
-    use crate::spec::CampaignSpec;
-    use crate::summary::summarise;
-
-    fn summary_and_rows() -> (Summary, Vec<Row>) {
-        let spec = CampaignSpec::from_toml("name = \"p\"", "t").unwrap();
-        let meta = CampaignMeta {
-            spec,
-            navigators: vec!["nat".into(), "a<b".into()],
-            trials: vec![],
-            skipped: vec![],
-            shard: None,
-            jobs: 0,
-        };
-        let mut rows = Vec::new();
-        for t in 0..6 {
-            rows.push(row(t, "nat", "reached", 0, 10.0 + t as f64));
-            rows.push(row(t, "a<b", if t < 3 { "reached" } else { "timeout" }, 0, 12.0));
-        }
-        (summarise(&meta, &rows).0, rows)
-    }
-
-    #[test]
-    fn success_plot_has_a_line_and_a_point_per_bin_for_each_navigator() {
-        let (s, _) = summary_and_rows();
-        let svg = success_vs_rock_abundance(&s);
-        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        assert_eq!(svg.matches("<polyline").count(), 2);
-        assert_eq!(svg.matches("<circle").count(), 2 * 3);
-        assert!(svg.contains("a&lt;b") && !svg.contains("a<b"), "names are escaped");
-    }
-
-    #[test]
-    fn path_ratio_plot_has_a_dot_per_reached_run() {
-        let (s, rows) = summary_and_rows();
-        let svg = path_ratio(&s, &rows);
-        assert_eq!(svg.matches("<circle").count(), 6 + 3);
-        assert_eq!(svg.matches("<title>median").count(), 2);
-    }
-
-    #[test]
-    fn tick_steps_are_round() {
-        assert_eq!(nice_step(0.13), 0.1);
-        assert_eq!(nice_step(0.3), 0.2);
-        assert_eq!(nice_step(0.04), 0.05);
-        assert_eq!(nice_step(8.0), 10.0);
-    }
-}
+#[path = "plots_tests.rs"]
+mod tests;

@@ -75,6 +75,11 @@ pub struct Trace {
     pub overlays: Vec<Overlay>,
     /// Cells covered by range data (placed with the true pose: this is for display only).
     pub sensed: Option<Grid2<bool>>,
+    /// Simulated time of every pose in `estimate` (s; the start, then after every command).
+    pub sim_time_s: Vec<f64>,
+    /// Wall-clock time the loop spent on each cycle, from the previous command's end to this
+    /// one's (s; 0 for the start), for the same samples; empty when unknown.
+    pub compute_s: Vec<f64>,
 }
 
 /// Everything a run produces.

@@ -1,5 +1,6 @@
-//! Writing a run's output folder: `report.json` and `traverse.png`, each written to a temporary
-//! file and renamed, so a reader never sees a half-written output.
+//! Writing a run's output folder: `report.json`, `traverse.png` and the timeline
+//! (`timeline.svg`, `timeline.png`), each written to a temporary file and renamed, so a reader
+//! never sees a half-written output.
 
 use anyhow::Context;
 use rovernav_executive::{Report, RunOutput, Trace, World};
@@ -19,12 +20,13 @@ pub fn write_atomic(
     Ok(())
 }
 
-/// Writes report.json and traverse.png into `dir` (created if needed).
+/// Writes report.json, traverse.png and the timeline into `dir` (created if needed).
 pub fn write_run_outputs(dir: &Path, output: &RunOutput) -> anyhow::Result<()> {
     write_outputs(dir, &output.report, &output.world, &output.trace)
 }
 
-/// Writes report.json and traverse.png from a run's pieces (a replay rebuilds them from a log).
+/// Writes report.json, traverse.png and the timeline from a run's pieces (a replay rebuilds them
+/// from a log).
 pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
@@ -36,6 +38,15 @@ pub fn write_outputs(dir: &Path, report: &Report, world: &World, trace: &Trace) 
     let picture = rovernav_viz::run_traverse_png(report, world, trace)?;
     write_atomic(&dir.join("traverse.png"), |b| {
         b.extend_from_slice(&picture);
+        Ok(())
+    })?;
+    let (svg, png) = rovernav_viz::run_timeline(report, world, trace)?;
+    write_atomic(&dir.join("timeline.svg"), |b| {
+        b.extend_from_slice(svg.as_bytes());
+        Ok(())
+    })?;
+    write_atomic(&dir.join("timeline.png"), |b| {
+        b.extend_from_slice(&png);
         Ok(())
     })
 }

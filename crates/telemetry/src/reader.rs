@@ -253,6 +253,7 @@ impl LoggedRun {
         let truths = self.per_cycle(&self.truths, |m| m.cycle, topics::TRUTH, upto)?;
         let estimates = self.per_cycle(&self.estimates, |m| m.cycle, topics::ESTIMATE, upto)?;
         let frames = self.per_cycle(&self.frames, |m| m.cycle, topics::SENSOR_FRAME, upto)?;
+        let cycles = self.per_cycle(&self.cycles, |m| m.cycle, topics::CYCLE, upto)?;
         let truth: Vec<Pose3> = truths.iter().map(|m| m.pose).collect();
         let mut sensed = Grid2::filled(sensed_geometry(world), false);
         // The loop marks the clouds of executed commands only, placed with the true pose.
@@ -271,6 +272,11 @@ impl LoggedRun {
             plans: self.plans.iter().filter(|p| p.cycle <= upto).map(|p| p.points.clone()).collect(),
             overlays,
             sensed: Some(sensed),
+            sim_time_s: cycles.iter().map(|m| m.sim_time_s).collect(),
+            // The logging run's wall clock between cycle markers: the loop's time per cycle.
+            compute_s: std::iter::once(0.0)
+                .chain(cycles.windows(2).map(|w| (w[1].wall_time_s - w[0].wall_time_s).max(0.0)))
+                .collect(),
         })
     }
 

@@ -1,0 +1,153 @@
+//! What a traverse picture draws, in which colour, and the legend naming each kind that is
+//! present in a given picture (and only those).
+
+use super::TraverseScene;
+use super::frame::Frame;
+use plotters::style::RGBColor;
+use rovernav_core::{Overlay, OverlayKind};
+
+/// The driven (true) path.
+pub const DRIVEN: RGBColor = RGBColor(255, 255, 255);
+/// The estimated path.
+pub const ESTIMATED: RGBColor = RGBColor(255, 225, 0);
+/// The last plan.
+pub const PLAN: RGBColor = RGBColor(30, 80, 255);
+/// Earlier plans.
+pub const OLD_PLAN: RGBColor = RGBColor(130, 160, 255);
+/// Rocks taller than the belly clearance.
+pub const HAZARD_ROCK: RGBColor = RGBColor(205, 30, 25);
+/// Smaller rocks' outlines.
+pub const ROCK: RGBColor = RGBColor(80, 60, 45);
+/// C-obstacles.
+pub const C_OBSTACLE: RGBColor = RGBColor(255, 140, 0);
+/// Sensed wedges.
+pub const WEDGE: RGBColor = RGBColor(0, 175, 255);
+/// Other navigator drawings.
+pub const OTHER: RGBColor = RGBColor(225, 225, 225);
+/// Keep-out zones.
+pub const KEEP_OUT: RGBColor = RGBColor(255, 0, 255);
+/// Hazard contacts.
+pub const CONTACT: RGBColor = RGBColor(255, 0, 0);
+/// The start.
+pub const START: RGBColor = RGBColor(0, 200, 0);
+/// The goal and its tolerance.
+pub const GOAL: RGBColor = RGBColor(255, 200, 0);
+/// Waypoints.
+pub const WAYPOINT: RGBColor = RGBColor(0, 230, 230);
+/// The true end and the footprint there.
+pub const TRUE_END: RGBColor = RGBColor(255, 255, 255);
+/// Outlines that keep light marks visible on light ground.
+pub const EDGE: RGBColor = RGBColor(0, 0, 0);
+
+/// How a legend entry's sample is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mark {
+    /// A line of a width (px).
+    Line(RGBColor, u32),
+    /// A translucent patch.
+    Patch(RGBColor),
+    /// A filled disc.
+    Disc(RGBColor),
+    /// A ring.
+    Ring(RGBColor),
+    /// An X.
+    Cross(RGBColor),
+    /// A diamond.
+    Diamond(RGBColor),
+    /// A rectangle outline.
+    Outline(RGBColor),
+}
+
+/// One legend line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// Sample.
+    pub mark: Mark,
+    /// Words.
+    pub label: String,
+}
+
+fn entry(mark: Mark, label: &str) -> Entry {
+    Entry { mark, label: label.to_string() }
+}
+
+/// The legend of a scene drawn in `frame`: one entry per kind of mark present, in drawing order.
+pub fn entries(scene: &TraverseScene<'_>, frame: &Frame) -> Vec<Entry> {
+    let mut out = Vec::new();
+    let trace = scene.trace;
+    if trace.sensed.as_ref().is_some_and(|s| s.data.iter().any(|&v| v)) {
+        out.push(entry(Mark::Patch(RGBColor(60, 200, 255)), "ground seen by range sensors"));
+    }
+    let in_frame = |x: f64, y: f64| x >= frame.x0 && x <= frame.x1 && y >= frame.y0 && y <= frame.y1;
+    let rocks = scene.terrain.rocks.iter().filter(|r| in_frame(r.x, r.y));
+    let (mut tall, mut small) = (false, false);
+    for r in rocks {
+        if r.height > scene.rover.clearance {
+            tall = true;
+        } else {
+            small = true;
+        }
+    }
+    if tall {
+        out.push(entry(Mark::Disc(HAZARD_ROCK), "rock taller than the belly clearance"));
+    }
+    if small {
+        out.push(entry(Mark::Ring(ROCK), "smaller rock"));
+    }
+    if !scene.goal.keep_out.is_empty() {
+        out.push(entry(Mark::Patch(KEEP_OUT), "keep-out zone"));
+    }
+    let has = |kind: OverlayKind| {
+        trace
+            .overlays
+            .iter()
+            .any(|o| matches!(o, Overlay::Polygon(_, k) | Overlay::Polyline(_, k) if *k == kind))
+    };
+    for (kind, label) in [
+        (OverlayKind::CObstacle, "C-obstacle (obstacle grown by the rover's size)"),
+        (OverlayKind::Wedge, "sensed wedge"),
+        (OverlayKind::Plan, "navigator's path drawing"),
+        (OverlayKind::Other, "other navigator drawing"),
+    ] {
+        if has(kind) {
+            out.push(entry(Mark::Line(overlay_colour(kind), 2), label));
+        }
+    }
+    if trace.plans.len() > 1 {
+        out.push(entry(Mark::Line(OLD_PLAN, 1), "earlier plans"));
+    }
+    if !trace.plans.is_empty() {
+        out.push(entry(Mark::Line(PLAN, 2), "last plan"));
+    }
+    if trace.estimate.len() > 1 {
+        out.push(entry(Mark::Line(ESTIMATED, 1), "estimated path"));
+    }
+    if trace.truth.len() > 1 {
+        out.push(entry(Mark::Line(DRIVEN, 3), "driven path (truth)"));
+    }
+    if !scene.report.hazard_events.is_empty() {
+        out.push(entry(Mark::Cross(CONTACT), "hazard contact"));
+    }
+    out.push(entry(Mark::Disc(START), "start"));
+    out.push(entry(Mark::Ring(GOAL), "goal and its tolerance"));
+    if !scene.goal.waypoints.is_empty() {
+        out.push(entry(Mark::Diamond(WAYPOINT), "waypoint"));
+    }
+    if !trace.truth.is_empty() {
+        out.push(entry(Mark::Outline(TRUE_END), "rover footprint at the end (truth)"));
+    }
+    if !trace.estimate.is_empty() {
+        out.push(entry(Mark::Diamond(ESTIMATED), "estimated end"));
+    }
+    out
+}
+
+/// The colour of a navigator overlay kind.
+pub fn overlay_colour(kind: OverlayKind) -> RGBColor {
+    match kind {
+        OverlayKind::CObstacle => C_OBSTACLE,
+        OverlayKind::Wedge => WEDGE,
+        OverlayKind::Plan => PLAN,
+        OverlayKind::Other => OTHER,
+    }
+}
