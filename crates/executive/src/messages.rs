@@ -66,6 +66,9 @@ pub mod topics {
     /// Tooling arm -> displays and logs: one instrument placement (AutoPlace): the chosen target
     /// or the refusal, the arm's joint states over time, the terrain octree.
     pub const ARM_PLACEMENT: Topic<crate::arm_server::PlacementMsg> = Topic::new("/arm/placement");
+    /// Deliberative layer -> displays and logs: a science watch's compact summary when it ends
+    /// (events by kind, times, positions in the images, what was sent, bytes against budget).
+    pub const SCIENCE_SUMMARY: Topic<crate::deliberative::WatchSummary> = Topic::new("/science/summary");
     /// Reflexive layer -> deliberative layer: the state of each command it works on.
     pub const TASK_STATUS: Topic<TaskStatusMsg> = Topic::new("/executive/task_status");
     /// Pose estimator -> everyone: the pose estimate after each frame.
@@ -99,6 +102,7 @@ pub mod topics {
             row(EXECUTIVE_CANCEL),
             row(ARM_COMMAND),
             row(ARM_PLACEMENT),
+            row(SCIENCE_SUMMARY),
             row(TASK_STATUS),
             row(LOCALIZATION_ESTIMATE),
             row(LOCALIZATION_RESET),
@@ -516,7 +520,7 @@ mod tests {
     #[test]
     fn every_topic_name_is_valid_and_has_a_schema() {
         let all = topics::all();
-        assert_eq!(all.len(), 18);
+        assert_eq!(all.len(), 19);
         for (name, schema) in all {
             assert!(rovernav_bus::check_topic_name(name).is_ok(), "{name}");
             assert!(schema["type"].is_string() || schema["oneOf"].is_array(), "{name}: {schema}");

@@ -336,6 +336,13 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         let placements = rovernav_telemetry::read_log(&out_dir.join("telemetry.mcap"))?.placements;
         output::write_placement_pictures(&out_dir, &placements, &output.world.rover)?;
     }
+    let summaries: Vec<_> = output
+        .report
+        .tasks
+        .iter()
+        .filter_map(|t| rovernav_executive::deliberative::WatchSummary::from_message(&t.message))
+        .collect();
+    science_cmd::write_watch_summaries(&out_dir, &summaries)?;
     let report = &output.report;
     if args.json {
         println!("{}", serde_json::to_string_pretty(report)?);

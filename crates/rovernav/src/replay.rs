@@ -27,6 +27,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         args.out.clone().unwrap_or_else(|| args.log.parent().unwrap_or(Path::new(".")).join("replay"));
     output::write_outputs(&out_dir, &replay.report, &replay.world, &replay.trace)?;
     output::write_placement_pictures(&out_dir, &log.placements, &replay.world.rover)?;
+    crate::science_cmd::write_watch_summaries(&out_dir, &log.science)?;
     let shown = args.log.display();
     if !replay.complete {
         let why = log.end.truncated.as_deref().unwrap_or("the log has no final report");

@@ -56,6 +56,21 @@ pub struct DetectArgs {
     pub json: bool,
 }
 
+/// Writes the science watches' summaries (`/science/summary`) to `science.json` in `out_dir`,
+/// one JSON array; nothing when the run had no watch. `rovernav run` writes it from the report's
+/// task messages, `rovernav replay` from the telemetry log: the two files are the same.
+pub fn write_watch_summaries(
+    out_dir: &Path,
+    summaries: &[rovernav_executive::deliberative::WatchSummary],
+) -> anyhow::Result<()> {
+    if summaries.is_empty() {
+        return Ok(());
+    }
+    let path = out_dir.join("science.json");
+    let text = serde_json::to_string_pretty(summaries)? + "\n";
+    std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))
+}
+
 /// Runs `rovernav science`.
 pub fn run(command: ScienceCommand) -> anyhow::Result<()> {
     match command {

@@ -32,6 +32,16 @@ pub enum EventKind {
     DustDevil,
 }
 
+impl EventKind {
+    /// Its name in summaries (`cloud`, `dust_devil`).
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Cloud => "cloud",
+            EventKind::DustDevil => "dust_devil",
+        }
+    }
+}
+
 /// One detected event in an image.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Event {
@@ -92,6 +102,17 @@ pub enum Product {
     Crops(Vec<[u32; 4]>),
     /// Nothing but its summary record.
     SummaryOnly,
+}
+
+impl Product {
+    /// Its name in summaries (`full`, `crops`, `summary_only`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Product::Full => "full",
+            Product::Crops(_) => "crops",
+            Product::SummaryOnly => "summary_only",
+        }
+    }
 }
 
 /// The decision for one image.

@@ -56,6 +56,8 @@ pub struct LoggedRun {
     pub report: Option<Report>,
     /// `/bus/arm/placement`: every instrument placement the tooling arm decided.
     pub placements: Vec<rovernav_executive::arm_server::PlacementMsg>,
+    /// `/bus/science/summary`: every science watch's summary, in the order the watches ended.
+    pub science: Vec<rovernav_executive::deliberative::WatchSummary>,
     /// Messages per topic (unknown topics included: they are counted and skipped).
     pub topic_counts: BTreeMap<String, u64>,
     /// How far reading got.
@@ -137,6 +139,7 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
             topics::OVERLAYS => run.overlays = Some(decode(data).map_err(decode_err)?),
             topics::REPORT => run.report = Some(decode(data).map_err(decode_err)?),
             topics::ARM_PLACEMENT => run.placements.push(decode(data).map_err(decode_err)?),
+            topics::SCIENCE_SUMMARY => run.science.push(decode(data).map_err(decode_err)?),
             _ => {}
         }
     }

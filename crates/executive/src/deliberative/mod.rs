@@ -19,6 +19,7 @@ mod approach;
 mod commands;
 mod direct;
 mod plan;
+mod science_summary;
 mod science_watch;
 mod tasks;
 #[cfg(test)]
@@ -26,7 +27,8 @@ mod tests;
 
 pub use approach::{NAVIGATOR_LEG_MIN_M, TRACK_STANDOFF_M};
 pub use direct::stop_cause;
-pub use science_watch::{Watch, WatchKind, WatchSpec, WatchSummary};
+pub use science_summary::{EventSummary, ImageSummary, WatchSummary};
+pub use science_watch::{MAX_INTERVAL_S, Watch, WatchKind, WatchSpec};
 pub use tasks::{Designation, Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
 
 use crate::components::{JausState, Port};
@@ -124,6 +126,7 @@ impl Deliberative {
             Port::of(topics::SYSTEM_CONTROL),
             Port::of(topics::OPERATOR_REPLY),
             Port::of(topics::PLATFORM_HOLD),
+            Port::of(topics::SCIENCE_SUMMARY),
         ]
     }
 

@@ -3,27 +3,43 @@
 //!
 //! The rover stands still while the mast points the Navcams at the sky (`cloud_watch`, tilted
 //! up) or at the horizon (`dust_devil_watch`) and takes `frames` images, one `Sense` command
-//! each. The cloud detector runs on each left image as it arrives; the dust-devil detector on
-//! the whole sequence once it is complete (it needs the sequence's average). The triage then
-//! keeps (sends in full or as crops around the detections) or discards each image within a
-//! budget of `budget` times the raw volume, and the task ends with the compact summary the paper
-//! describes (images, events by kind, what was kept) as its message, which `report.json`
+//! each, `interval_s` apart: image k is due at the first image's time plus k intervals, and
+//! until then the task holds the platform (`/platform/hold`, the path the tooling arm and the
+//! sleep mode take), which rests and samples while the simulated clock, the power model and the
+//! log move on as on a rover. The simulator renders each image at its capture time, so the sky's
+//! clouds and dust devils have drifted between images. The cloud detector runs on each left image
+//! as it arrives; the dust-devil detector on the whole sequence once it is complete (it needs the
+//! sequence's average). The triage then keeps (sends in full or as crops around the detections)
+//! or discards each image within a budget of `budget` times the raw volume, and the task ends
+//! with the compact summary the paper describes ([`super::science_summary`]): published on
+//! `/science/summary` and, as JSON, at the end of the task's message, which `report.json`
 //! carries.
 //!
 //! Defaults: the paper's dust-devil sequences had 6 to 20 images; a watch takes 10 by default,
-//! a cloud watch 4. Departure: the platform has no wait command, so images come at the
-//! platform's capture rate (a Navcam pair takes a few seconds) and the summary gives their
-//! actual times; `interval_s` is recorded as the rate asked.
+//! a cloud watch 4. Departures: the platform rests in samples (10 Hz by default), so an image
+//! comes at the first sample at or after its due time, at most one sample period late when the
+//! interval less the capture cycle (the Navcam pair's capture time plus one rest sample) is not a
+//! whole number of periods; the schedule counts from the first image, so lateness never adds up.
+//! An interval shorter than the capture cycle gives images back to back, at the capture rate (the
+//! summary gives their actual times). Intervals are at most 3600 s (the platform's longest hold).
 
+use super::science_summary::WatchSummary;
 use super::{Deliberative, TaskKind};
 use crate::messages::{
-    CommandMsg, FrameMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState, TaskStatusMsg, topics,
+    CommandMsg, FrameMsg, HoldMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState, TaskStatusMsg,
+    topics,
 };
 use rovernav_bus::{Bus, BusError};
 use rovernav_science::{
-    CloudParams, DustDevilParams, Event, EventKind, GreyF32, ImageRecord, Product, SkyParams, detect_clouds,
+    CloudParams, DustDevilParams, Event, EventKind, GreyF32, ImageRecord, SkyParams, detect_clouds,
     detect_dust_devils, segment_sky, triage,
 };
+
+/// Longest interval between images (s): the platform's longest hold.
+pub const MAX_INTERVAL_S: f64 = 3600.0;
+
+/// Slack on simulated times (s) when deciding that an image is due.
+const TIME_SLACK_S: f64 = 1e-6;
 
 /// Which detector a watch runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,8 +86,8 @@ impl WatchSpec {
         if !(min..=100).contains(&self.frames) {
             return Err(("frames", format!("must be {min} to 100")));
         }
-        if !(self.interval_s.is_finite() && self.interval_s >= 0.0) {
-            return Err(("interval_s", "must be a non-negative number of seconds".into()));
+        if !(0.0..=MAX_INTERVAL_S).contains(&self.interval_s) {
+            return Err(("interval_s", format!("must be 0 to {MAX_INTERVAL_S} seconds")));
         }
         if !(self.pan.is_finite() && self.tilt.is_finite() && self.tilt.abs() <= std::f64::consts::FRAC_PI_2)
         {
@@ -81,55 +97,6 @@ impl WatchSpec {
             return Err(("budget", "must be a fraction in (0, 1]".into()));
         }
         Ok(())
-    }
-}
-
-/// The outcome of a watch: what the detector found and what the triage keeps.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct WatchSummary {
-    /// `clouds` or `dust_devils`.
-    pub kind: &'static str,
-    /// Images taken.
-    pub images: usize,
-    /// Images with at least one detection.
-    pub images_with_events: usize,
-    /// Detections over all images.
-    pub events: usize,
-    /// Ids of the images kept in full.
-    pub kept_full: Vec<String>,
-    /// Ids of the images kept as crops around their detections.
-    pub kept_crops: Vec<String>,
-    /// Detections only in the summary (over budget).
-    pub events_summary_only: usize,
-    /// Bytes sent (summary and products) and the raw volume.
-    pub bytes: [u64; 2],
-    /// Times of the images (s).
-    pub times_s: Vec<f64>,
-}
-
-impl WatchSummary {
-    /// Images kept in full or as crops.
-    pub fn kept(&self) -> usize {
-        self.kept_full.len() + self.kept_crops.len()
-    }
-
-    /// One line for the task's message.
-    pub fn line(&self) -> String {
-        format!(
-            "{} watch: {} images, {} with events ({} detections); kept {} (full {:?}, crops {:?}), {} detections \
-             summary-only; {} of {} bytes sent; summary {}",
-            self.kind,
-            self.images,
-            self.images_with_events,
-            self.events,
-            self.kept(),
-            self.kept_full,
-            self.kept_crops,
-            self.events_summary_only,
-            self.bytes[0],
-            self.bytes[1],
-            serde_json::to_string(self).unwrap_or_default()
-        )
     }
 }
 
@@ -151,6 +118,13 @@ impl Watch {
     /// Whether more images are to be taken.
     pub fn wants_more(&self) -> bool {
         self.records.len() < self.spec.frames as usize
+    }
+
+    /// Simulated time the next image is due (s): the first image's time plus one interval per
+    /// image taken; `None` before the first image (it is taken at once).
+    pub fn next_due_s(&self) -> Option<f64> {
+        let first = self.records.first()?;
+        Some(first.time_s + self.spec.interval_s * self.records.len() as f64)
     }
 
     /// Adds the left Navcam image of a frame (cloud detection runs at once).
@@ -181,8 +155,9 @@ impl Watch {
         Ok(())
     }
 
-    /// Runs what is left (the dust-devil detector on the sequence) and the triage.
-    pub fn finish(&mut self) -> Result<WatchSummary, String> {
+    /// Runs what is left (the dust-devil detector on the sequence) and the triage; `task` is the
+    /// watch task's id.
+    pub fn finish(&mut self, task: u64) -> Result<WatchSummary, String> {
         if self.kind == WatchKind::DustDevils {
             let det =
                 detect_dust_devils(&self.frames, &DustDevilParams::default()).map_err(|e| e.to_string())?;
@@ -200,23 +175,11 @@ impl Watch {
         }
         let raw: u64 = self.records.iter().map(ImageRecord::full_bytes).sum();
         let plan = triage(&self.records, (self.spec.budget * raw as f64) as u64);
-        let ids = |want: fn(&Product) -> bool| -> Vec<String> {
-            plan.decisions.iter().filter(|d| want(&d.product)).map(|d| d.id.clone()).collect()
+        let kind = match self.kind {
+            WatchKind::Clouds => "clouds",
+            WatchKind::DustDevils => "dust_devils",
         };
-        Ok(WatchSummary {
-            kind: match self.kind {
-                WatchKind::Clouds => "clouds",
-                WatchKind::DustDevils => "dust_devils",
-            },
-            images: self.records.len(),
-            images_with_events: plan.images_with_events,
-            events: self.records.iter().map(|r| r.events.len()).sum(),
-            kept_full: ids(|p| *p == Product::Full),
-            kept_crops: ids(|p| matches!(p, Product::Crops(_))),
-            events_summary_only: plan.events_summary_only,
-            bytes: [plan.bytes_used, raw],
-            times_s: self.records.iter().map(|r| r.time_s).collect(),
-        })
+        Ok(WatchSummary::of(task, kind, self.spec.interval_s, &self.records, &plan))
     }
 }
 
@@ -225,6 +188,8 @@ pub(super) struct WatchRun {
     pub(super) watch: Watch,
     /// The current capture finished with these images.
     done: Option<Vec<ImageMsg>>,
+    /// The next image is due at this simulated time (s); the platform holds until then.
+    due_s: Option<f64>,
 }
 
 impl Deliberative {
@@ -238,7 +203,8 @@ impl Deliberative {
         if let Err((field, why)) = spec.check(kind) {
             return self.fail_now(i, format!("{}: {field} {why}", self.tasks[i].kind.name()));
         }
-        self.watches.insert(self.tasks[i].id, WatchRun { watch: Watch::new(kind, spec), done: None });
+        self.watches
+            .insert(self.tasks[i].id, WatchRun { watch: Watch::new(kind, spec), done: None, due_s: None });
         self.watch_capture(bus, i, cmd, spec)
     }
 
@@ -276,39 +242,67 @@ impl Deliberative {
         true
     }
 
-    /// Advances every watch whose capture is done: the next image, or the summary.
+    /// Advances every watch whose capture is done or whose next image is due: holds the
+    /// platform until the next image is due, takes it, or ends with the summary.
     pub(super) fn pump_watches(&mut self, bus: &mut Bus) -> Result<(), BusError> {
         enum Next {
             Fail(String),
-            Capture(WatchSpec, usize),
-            Done(WatchSummary),
+            Wait(f64),
+            Capture(WatchSpec),
+            Done(Box<WatchSummary>),
         }
+        let now = self.time_s;
         for i in 0..self.tasks.len() {
             if self.tasks[i].state != TaskState::InProcess {
                 continue;
             }
-            let Some(run) = self.watches.get_mut(&self.tasks[i].id) else { continue };
-            let Some(images) = run.done.take() else { continue };
-            let added = match images.iter().find(|m| m.camera == "navcam_left") {
-                Some(left) => run.watch.add(left),
-                None => Err("the frame has no left Navcam image".into()),
+            let task = self.tasks[i].id;
+            let Some(run) = self.watches.get_mut(&task) else { continue };
+            let next = match run.due_s {
+                Some(due) if now + TIME_SLACK_S < due => Next::Wait(due),
+                Some(_) => {
+                    run.due_s = None;
+                    Next::Capture(run.watch.spec)
+                }
+                None => {
+                    let Some(images) = run.done.take() else { continue };
+                    let added = match images.iter().find(|m| m.camera == "navcam_left") {
+                        Some(left) => run.watch.add(left),
+                        None => Err("the frame has no left Navcam image".into()),
+                    };
+                    match added {
+                        Err(e) => Next::Fail(e),
+                        Ok(()) if run.watch.wants_more() => match run.watch.next_due_s() {
+                            Some(due) if now + TIME_SLACK_S < due => {
+                                run.due_s = Some(due);
+                                Next::Wait(due)
+                            }
+                            _ => Next::Capture(run.watch.spec),
+                        },
+                        Ok(()) => match run.watch.finish(task) {
+                            Ok(summary) => Next::Done(Box::new(summary)),
+                            Err(e) => Next::Fail(e),
+                        },
+                    }
+                }
             };
-            let next = match added {
-                Err(e) => Next::Fail(e),
-                Ok(()) if run.watch.wants_more() => Next::Capture(run.watch.spec, run.watch.records.len()),
-                Ok(()) => match run.watch.finish() {
-                    Ok(summary) => Next::Done(summary),
-                    Err(e) => Next::Fail(e),
-                },
-            };
+            let (taken, frames) = (run.watch.records.len(), run.watch.spec.frames);
             match next {
                 Next::Fail(e) => self.fail_now(i, format!("watch: {e}"))?,
-                Next::Capture(spec, taken) => {
-                    self.tasks[i].message = format!("{taken} of {} images taken", spec.frames);
+                Next::Wait(due) => {
+                    self.tasks[i].message =
+                        format!("{taken} of {frames} images taken; next due at {due:.1} s");
+                    // Asked again every cycle until it is due: a hold cut short (the sleep mode
+                    // took over) is renewed.
+                    bus.publish(topics::PLATFORM_HOLD, HoldMsg { until_s: due, sleep: false })?;
+                }
+                Next::Capture(spec) => {
+                    self.tasks[i].message = format!("{taken} of {frames} images taken");
                     let cmd = self.command_id();
                     self.watch_capture(bus, i, cmd, spec)?;
                 }
                 Next::Done(summary) => {
+                    bus.publish(topics::SCIENCE_SUMMARY, (*summary).clone())?;
                     self.tasks[i].state = TaskState::Success;
                     self.tasks[i].message = summary.line();
                 }
@@ -355,17 +349,18 @@ mod tests {
             watch.add(&msg(c, 60.0 * k as f64)).unwrap();
         }
         assert!(!watch.wants_more());
-        let s = watch.finish().unwrap();
-        assert_eq!((s.images, s.images_with_events), (4, 1), "{}", s.line());
+        let s = watch.finish(3).unwrap();
+        assert_eq!((s.task, s.images, s.images_with_events), (3, 4, 1), "{}", s.line());
         assert_eq!(s.kept(), 1, "{}", s.line());
         assert!(s.kept_full.iter().chain(&s.kept_crops).all(|id| id == "001"), "{}", s.line());
-        assert!(s.bytes[0] <= s.bytes[1] / 10 + 1, "{}", s.line());
+        assert!(s.bytes_sent <= s.raw_bytes / 10 + 1, "{}", s.line());
+        assert_eq!(s.times_s(), vec![0.0, 60.0, 120.0, 180.0]);
         // An empty sky: nothing kept, every image summarised.
         let mut empty = Watch::new(WatchKind::Clouds, WatchSpec { frames: 3, ..spec });
         for (k, c) in clear.iter().enumerate() {
             empty.add(&msg(c, 60.0 * k as f64)).unwrap();
         }
-        let s = empty.finish().unwrap();
+        let s = empty.finish(4).unwrap();
         assert_eq!((s.images, s.images_with_events, s.kept()), (3, 0, 0), "{}", s.line());
     }
 
@@ -377,7 +372,7 @@ mod tests {
         let kinds: Vec<TaskKind> = plan.iter().map(|t| t.kind).collect();
         let TaskKind::CloudWatch(c) = kinds[0] else { panic!("{kinds:?}") };
         assert_eq!((c.frames, c.interval_s), (3, 60.0));
-        assert!((c.tilt - 25f64.to_radians()).abs() < 1e-12 && c.budget == 0.1);
+        assert!((c.tilt - 25f64.to_radians()).abs() < 1e-12 && c.budget == 0.2);
         let TaskKind::DustDevilWatch(d) = kinds[1] else { panic!("{kinds:?}") };
         assert_eq!(d.frames, 6);
         let text = std::fs::read_to_string(&path).unwrap();

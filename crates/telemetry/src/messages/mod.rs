@@ -43,6 +43,8 @@ pub mod topics {
     pub const OVERLAYS: &str = "/navigation/overlays";
     /// Each instrument placement, as the tooling arm published it on the bus (AutoPlace).
     pub const ARM_PLACEMENT: &str = "/bus/arm/placement";
+    /// Each science watch's compact summary, as the deliberative layer published it on the bus.
+    pub const SCIENCE_SUMMARY: &str = "/bus/science/summary";
     /// The power system's reading after each command (battery, panel, loads).
     pub const POWER: &str = "/power";
     /// Every topic a run logs, in the order they are first written.
