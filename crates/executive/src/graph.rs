@@ -76,7 +76,9 @@ pub const NODES: &[NodeSpec] = &[
                     &crate::run_loop::registry_name(p.settings),
                     p.rover.clone(),
                 )
-                .with_params(p.settings.navigator_params.clone()),
+                .with_params(p.settings.navigator_params.clone())
+                .with_shadow(p.options.shadow_navigator.as_deref())
+                .map_err(|message| RuntimeError::Build { entry: "navigator", message })?,
             ))
         },
     },

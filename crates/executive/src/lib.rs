@@ -32,6 +32,7 @@ mod run_loop;
 pub mod runtime;
 pub mod scoring;
 pub mod sensor_servers;
+pub mod shadow;
 pub mod world;
 
 pub use command_language::{CommandError, OperatorCommand, help_text, parse_command};

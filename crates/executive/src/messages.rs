@@ -55,6 +55,9 @@ pub mod topics {
     pub const NAVIGATION_COMMAND: Topic<MotionRequest> = Topic::new("/navigation/command");
     /// Navigator -> displays and logs: the current plan (world frame).
     pub const NAVIGATION_PLAN: Topic<PlanMsg> = Topic::new("/navigation/plan");
+    /// Navigator -> displays and logs: what the shadow navigator (`shadow_navigator`) would have
+    /// done at each step, never obeyed.
+    pub const NAVIGATION_SHADOW: Topic<crate::shadow::ShadowMsg> = Topic::new("/navigation/shadow");
     /// Deliberative layer -> motion controller: operator and task motion or sensing commands.
     pub const EXECUTIVE_MOTION: Topic<MotionRequest> = Topic::new("/executive/motion");
     /// Deliberative layer -> navigator: drive to a goal (one leg of the mission plan).
@@ -97,6 +100,7 @@ pub mod topics {
             row(PLATFORM_HOLD),
             row(NAVIGATION_COMMAND),
             row(NAVIGATION_PLAN),
+            row(NAVIGATION_SHADOW),
             row(EXECUTIVE_MOTION),
             row(EXECUTIVE_DRIVE_TO),
             row(EXECUTIVE_CANCEL),
@@ -520,7 +524,9 @@ mod tests {
     #[test]
     fn every_topic_name_is_valid_and_has_a_schema() {
         let all = topics::all();
-        assert_eq!(all.len(), 19);
+        let names: std::collections::BTreeSet<&str> = all.iter().map(|(name, _)| *name).collect();
+        assert_eq!(names.len(), all.len(), "each topic listed once");
+        assert!(names.contains(topics::NAVIGATION_SHADOW.name()) && names.contains(topics::OPERATOR_REPLY.name()));
         for (name, schema) in all {
             assert!(rovernav_bus::check_topic_name(name).is_ok(), "{name}");
             assert!(schema["type"].is_string() || schema["oneOf"].is_array(), "{name}: {schema}");

@@ -12,6 +12,7 @@ use crate::messages::{
     CancelMsg, CommandMsg, DriveToMsg, EstimateMsg, FrameMsg, MotionRequest, Origin, PlanMsg, PoseMsg,
     TaskState, TaskStatusMsg, topics,
 };
+use crate::shadow::{ShadowNavigator, ShadowReport};
 use rovernav_bus::{Bus, BusError, Subscriber};
 use rovernav_core::{
     Goal, Localizer, NavCommand, NavInput, Navigator, Outcome, Overlay, Point2, PoseEstimate, RoverConfig,
@@ -79,6 +80,8 @@ pub struct NavigatorComponent {
     cancels: Option<Subscriber<CancelMsg>>,
     frames: Option<Subscriber<FrameMsg>>,
     estimates: Option<Subscriber<EstimateMsg>>,
+    /// A navigator riding along in shadow (`shadow_navigator`), never obeyed.
+    shadow: Option<ShadowNavigator>,
 }
 
 impl NavigatorComponent {
@@ -104,7 +107,19 @@ impl NavigatorComponent {
             cancels: None,
             frames: None,
             estimates: None,
+            shadow: None,
         }
+    }
+
+    /// Runs registered navigator `name` in shadow beside the hosted one (see [`crate::shadow`]).
+    pub fn with_shadow(mut self, name: Option<&str>) -> Result<Self, String> {
+        self.shadow = name.map(|n| ShadowNavigator::new(n, &self.rover)).transpose()?;
+        Ok(self)
+    }
+
+    /// The shadow navigator's record, if one rides along.
+    pub fn shadow_report(&self) -> Option<ShadowReport> {
+        self.shadow.as_ref().map(|s| s.report().clone())
     }
 
     /// Later legs' instances take these parameters (those the first instance was built with).
@@ -156,6 +171,9 @@ impl NavigatorComponent {
                 .map_err(|e| ComponentFault(e.to_string()))?;
             }
             self.unused = false;
+            if let Some(shadow) = self.shadow.as_mut() {
+                shadow.new_leg().map_err(ComponentFault)?;
+            }
             self.leg = Some((d.task, d.goal.clone()));
             self.leg_started = false;
         }
@@ -198,6 +216,7 @@ impl Component for NavigatorComponent {
             outputs: vec![
                 Port::of(topics::NAVIGATION_COMMAND),
                 Port::of(topics::NAVIGATION_PLAN),
+                Port::of(topics::NAVIGATION_SHADOW),
                 Port::of(topics::TASK_STATUS),
             ],
         }
@@ -230,6 +249,9 @@ impl Component for NavigatorComponent {
             localization_target: self.localization_target,
         };
         let command = self.navigator.step(&input);
+        if let Some(msg) = self.shadow.as_mut().and_then(|s| s.step(task, &input, &command)) {
+            ctx.bus.publish(topics::NAVIGATION_SHADOW, msg)?;
+        }
         self.fresh = false;
         let plan = self.navigator.planned_path();
         if plan != self.last_plan {

@@ -104,6 +104,9 @@ pub struct Report {
     /// The battery and the rover's sleep (absent without power readings).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub power: Option<crate::power::PowerReport>,
+    /// The navigator run in shadow beside the driving one (`shadow_navigator`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow: Option<crate::shadow::ShadowReport>,
 }
 
 /// The localiser's counters: terrain-matching fixes used and rejected, zero-velocity updates, slip

@@ -250,6 +250,9 @@ pub struct RunOptions {
     pub measure_peak_rss: bool,
     /// Sleep and wake thresholds on the battery's charge (`[power]`).
     pub power: crate::power::PowerPolicy,
+    /// A navigator to run in shadow beside the driving one (`shadow_navigator`; paper 003
+    /// section 6's "no update" checkout).
+    pub shadow_navigator: Option<String>,
 }
 
 impl RunOptions {
@@ -262,6 +265,7 @@ impl RunOptions {
             crashes: mission.crash_schedule(),
             tiles: crate::world::tiled_source(mission),
             power: mission.power.policy(),
+            shadow_navigator: mission.shadow_navigator_spec(),
             ..Self::default()
         }
     }

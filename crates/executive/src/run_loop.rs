@@ -400,6 +400,7 @@ fn executive_outcome(runtime: &Runtime, deliberative: &Deliberative) -> Report {
             })
             .collect(),
         power: deliberative.power_report(),
+        shadow: navigator_of(runtime).shadow_report(),
         ..Report::default()
     }
 }

@@ -59,6 +59,14 @@ pub enum RuntimeError {
         /// The built component's name.
         built: &'static str,
     },
+    /// A graph entry could not build its component.
+    #[error("component `{entry}`: {message}")]
+    Build {
+        /// The entry's name.
+        entry: &'static str,
+        /// Why.
+        message: String,
+    },
     /// The bus cannot deliver within a tick.
     #[error("the lockstep runtime needs a synchronous transport")]
     Asynchronous,

@@ -50,6 +50,11 @@ pub struct Mission {
     /// navigators` lists them); unset ones keep the navigator's defaults.
     #[serde(default)]
     pub navigator_params: rovernav_navigation::NavigatorParams,
+    /// A registered navigator to run in shadow beside the driving one: stepped on the same
+    /// inputs, its commands and plans logged on `/navigation/shadow`, never obeyed (paper 003
+    /// section 6's "no update" checkout).
+    #[serde(default)]
+    pub shadow_navigator: Option<String>,
     /// Registry name of the localiser.
     #[serde(default = "default_localizer")]
     pub localizer: String,
@@ -194,6 +199,15 @@ impl Mission {
         }
     }
 
+    /// The shadow navigator as one registry name (see [`Mission::navigator_spec`]), if any.
+    pub fn shadow_navigator_spec(&self) -> Option<String> {
+        let registry = rovernav_navigation::registry();
+        self.shadow_navigator.as_ref().map(|name| match registry.navigator(name, None) {
+            Ok(choice) => choice.spec(),
+            Err(_) => name.clone(),
+        })
+    }
+
     /// The localiser as one registry name (an alias, or `name(k=v,...)` with its parameters);
     /// the name as given when it is not registered.
     pub fn localizer_spec(&self) -> String {
@@ -281,6 +295,11 @@ impl Mission {
             return bad(&field, &e.to_string());
         }
         let registry = rovernav_navigation::registry();
+        if let Some(name) = &self.shadow_navigator
+            && let Err(e) = registry.navigator(name, None)
+        {
+            return bad("shadow_navigator", &e.to_string());
+        }
         if let Err(e) = registry.check_localizer(&self.localizer, &self.localizer_params)
             && !matches!(e, rovernav_navigation::NavigatorError::UnknownLocalizer { .. })
         {
