@@ -39,6 +39,32 @@ pub const TRUE_END: RGBColor = RGBColor(255, 255, 255);
 /// Outlines that keep light marks visible on light ground.
 pub const EDGE: RGBColor = RGBColor(0, 0, 0);
 
+/// Legend swatches' background.
+pub const SWATCH: RGBColor = RGBColor(150, 120, 95);
+
+/// Every solid colour marks are drawn in: a PNG palette keeps these exactly.
+pub const SOLID: [RGBColor; 19] = [
+    DRIVEN,
+    ESTIMATED,
+    PLAN,
+    OLD_PLAN,
+    HAZARD_ROCK,
+    ROCK,
+    C_OBSTACLE,
+    WEDGE,
+    OTHER,
+    KEEP_OUT,
+    CONTACT,
+    START,
+    GOAL,
+    WAYPOINT,
+    EDGE,
+    SWATCH,
+    RGBColor(255, 0, 0),
+    RGBColor(30, 30, 30),
+    RGBColor(60, 60, 60),
+];
+
 /// How a legend entry's sample is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Mark {

@@ -181,17 +181,42 @@ pub fn encode_png(width: u32, height: u32, rgb: &[u8]) -> std::io::Result<Vec<u8
     Ok(out)
 }
 
-/// Encodes RGB pixels as a 256-colour PNG (a NeuQuant palette, the same for the same pixels):
-/// a shaded terrain in full colour makes PNGs several times larger.
+/// Encodes RGB pixels as a 256-colour PNG: the marks' solid colours ([`legend::SOLID`], the
+/// outcome colours, black and white) exactly, the rest (shaded terrain, blends, text edges) by a
+/// NeuQuant palette, the same for the same pixels. A shaded terrain in full colour makes PNGs
+/// several times larger.
 pub fn encode_png_256(width: u32, height: u32, rgb: &[u8]) -> std::io::Result<Vec<u8>> {
+    let outcomes = ["reached", "help_requested", "timeout", "unreachable", "aborted", ""];
+    let fixed: Vec<[u8; 3]> = legend::SOLID
+        .iter()
+        .copied()
+        .chain(outcomes.iter().map(|o| caption::outcome_words(o).1))
+        .chain([BLACK, WHITE])
+        .map(|c| [c.0, c.1, c.2])
+        .fold(Vec::new(), |mut v, c| {
+            if !v.contains(&c) {
+                v.push(c);
+            }
+            v
+        });
+    let index_of_fixed: std::collections::HashMap<[u8; 3], u8> =
+        fixed.iter().enumerate().map(|(i, c)| (*c, i as u8)).collect();
     let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
-    let quant = color_quant::NeuQuant::new(10, 256, &rgba);
-    let indices: Vec<u8> = rgba.chunks_exact(4).map(|p| quant.index_of(p) as u8).collect();
+    let quant = color_quant::NeuQuant::new(10, 256 - fixed.len(), &rgba);
+    let indices: Vec<u8> = rgba
+        .chunks_exact(4)
+        .map(|p| match index_of_fixed.get(&[p[0], p[1], p[2]]) {
+            Some(&i) => i,
+            None => (fixed.len() + quant.index_of(p)) as u8,
+        })
+        .collect();
+    let mut palette: Vec<u8> = fixed.concat();
+    palette.extend(quant.color_map_rgb());
     let mut out = Vec::new();
     let mut encoder = png::Encoder::new(&mut out, width, height);
     encoder.set_color(png::ColorType::Indexed);
     encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_palette(quant.color_map_rgb());
+    encoder.set_palette(palette);
     encoder.set_compression(png::Compression::High);
     let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
     writer.write_image_data(&indices).map_err(std::io::Error::other)?;

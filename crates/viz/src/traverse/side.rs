@@ -116,7 +116,7 @@ fn draw_legend<DB: DrawingBackend>(area: &Area<DB>, entries: &[Entry]) -> DrawRe
     for (i, e) in entries.iter().enumerate() {
         let y = 28 + i as i32 * LINE as i32;
         let c = (16, y + 8);
-        area.draw(&Rectangle::new([(0, y), (32, y + 16)], RGBColor(150, 120, 95).filled()))?;
+        area.draw(&Rectangle::new([(0, y), (32, y + 16)], legend::SWATCH.filled()))?;
         match e.mark {
             Mark::Line(colour, w) => {
                 area.draw(&PathElement::new(vec![(3, c.1), (29, c.1)], colour.stroke_width(w)))?;
