@@ -148,7 +148,8 @@ pub fn success_vs_rock_abundance(summary: &Summary) -> String {
         let lo = centres.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = centres.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.2) };
-        let pad = if hi > lo { 0.1 * (hi - lo) } else { 0.02 };
+        // Room for the navigators dodged sideways around the outer bins.
+        let pad = if hi > lo { 0.2 * (hi - lo) } else { 0.02 };
         let area = plot_area(root);
         let mut chart = ChartBuilder::on(&area)
             .y_label_area_size(LEFT)
@@ -157,6 +158,7 @@ pub fn success_vs_rock_abundance(summary: &Summary) -> String {
         chart
             .configure_mesh()
             .disable_x_mesh()
+            .light_line_style(RGBColor(245, 245, 245))
             .x_labels(0)
             .y_labels(5)
             .y_label_formatter(&pct)
@@ -243,6 +245,7 @@ pub fn path_ratio(summary: &Summary, rows: &[Row]) -> String {
         chart
             .configure_mesh()
             .disable_x_mesh()
+            .light_line_style(RGBColor(245, 245, 245))
             .x_labels(0)
             .y_labels(7)
             .y_label_formatter(&fmt)
