@@ -178,7 +178,11 @@ pub fn draw<DB: DrawingBackend>(
         if i < 2 {
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(
+                    // The distance falls and the error grows over a run: each legend where its
+                    // curves usually leave room.
+                    if i == 0 { SeriesLabelPosition::UpperRight } else { SeriesLabelPosition::UpperLeft },
+                )
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK.mix(0.3))
                 .label_font(style(12.0, false))
