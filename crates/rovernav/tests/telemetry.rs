@@ -115,6 +115,15 @@ fn check_log_and_replay(out: &Path) -> Value {
     assert_eq!(serde_json::from_slice::<Value>(&replayed.stdout).unwrap(), report);
     let png = |dir: &Path| std::fs::read(dir.join("traverse.png")).unwrap();
     assert!(png(&replay_dir) == png(out), "the replayed picture is byte-identical");
+    // Both write the timeline, with its three panels, as SVG and PNG.
+    for dir in [out, replay_dir.as_path()] {
+        let svg = std::fs::read_to_string(dir.join("timeline.svg")).expect("timeline.svg written");
+        for panel in ["distance to the goal (m)", "localisation error (m)", "compute per cycle"] {
+            assert!(svg.contains(panel), "{}: no `{panel}` panel", dir.display());
+        }
+        let timeline_png = std::fs::read(dir.join("timeline.png")).expect("timeline.png written");
+        assert!(timeline_png.starts_with(b"\x89PNG\r\n\x1a\n"), "{}", dir.display());
+    }
     report
 }
 
