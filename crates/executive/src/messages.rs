@@ -526,7 +526,9 @@ mod tests {
         let all = topics::all();
         let names: std::collections::BTreeSet<&str> = all.iter().map(|(name, _)| *name).collect();
         assert_eq!(names.len(), all.len(), "each topic listed once");
-        assert!(names.contains(topics::NAVIGATION_SHADOW.name()) && names.contains(topics::OPERATOR_REPLY.name()));
+        assert!(
+            names.contains(topics::NAVIGATION_SHADOW.name()) && names.contains(topics::OPERATOR_REPLY.name())
+        );
         for (name, schema) in all {
             assert!(rovernav_bus::check_topic_name(name).is_ok(), "{name}");
             assert!(schema["type"].is_string() || schema["oneOf"].is_array(), "{name}: {schema}");
