@@ -17,6 +17,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
 import unittest
 
@@ -26,6 +27,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BIN = os.environ.get("ROVERNAV_BIN", os.path.join(ROOT, "target", "release", "rovernav"))
 START = (5.0, 5.0)  # the default mission's start
 GOAL = (12.0, 13.0)
+
+
+def drain(stream):
+    """Reads a child's output to its end on a thread, so a full pipe never blocks the child."""
+    threading.Thread(target=lambda: [None for _ in stream], daemon=True).start()
 
 
 def wait(what, pred, timeout=60.0):
@@ -46,13 +52,18 @@ class Firefox:
         self.process = subprocess.Popen(
             [binary, "--headless", "--no-remote", "--profile", profile, "--remote-debugging-port", "0"],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        url = None
-        for line in self.process.stdout:
-            found = re.search(r"WebDriver BiDi listening on (ws://\S+)", line)
-            if found:
-                url = found.group(1)
-                break
-        assert url, "Firefox did not start WebDriver BiDi"
+        # The address comes on a line of Firefox's output; a reader thread looks for it, so a
+        # Firefox that never prints it fails the test after 60 s instead of hanging it.
+        found = []
+        def find():
+            for line in self.process.stdout:
+                m = re.search(r"WebDriver BiDi listening on (ws://\S+)", line)
+                if m:
+                    found.append(m.group(1))
+                    break
+            drain(self.process.stdout)
+        threading.Thread(target=find, daemon=True).start()
+        url = wait("Firefox's WebDriver BiDi address", lambda: found and found[0])
         self.ws = connect(url + "/session", max_size=None)
         self.next_id = 0
         self.call("session.new", {"capabilities": {}})
@@ -124,6 +135,8 @@ class ConsoleInFirefox(unittest.TestCase):
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         cls.url = cls.server.stdout.readline().strip()
         assert cls.url.endswith("/?token=firefox-test-token"), f"first line: {cls.url!r}"
+        drain(cls.server.stdout)
+        drain(cls.server.stderr)
         cls.base = cls.url.split("/?")[0]
         os.makedirs(os.path.join(cls.tmp, "profile"))
         cls.firefox = Firefox(os.path.join(cls.tmp, "profile"))
@@ -171,10 +184,14 @@ class ConsoleInFirefox(unittest.TestCase):
         self.assertLess(math.dist((draft["goal"]["x"], draft["goal"]["y"]), goal_at), 0.15, draft)
         ff.click("#send")
         wait("the mission to run", lambda: ff.js("rovernav.state.phase") == "running")
+        # The run's world (logged at its start) has the goal the console sent: the clicked point,
+        # as the page rounded it.
+        goal = wait("the run's world", lambda: (lambda g: g if math.dist(
+            (g["position"]["x"], g["position"]["y"]), goal_at) < 0.15 else None)(ff.js("rovernav.map.world.goal")))
         first = wait("the rover's pose", lambda: ff.js("rovernav.state.rover"))
         wait("the rover icon to move", lambda: math.dist(
             (first["x"], first["y"]), (lambda p: (p["x"], p["y"]))(ff.js("rovernav.state.rover"))) > 1.0)
-        type(self).goal = goal_at
+        type(self).goal = (goal["position"]["x"], goal["position"]["y"])
 
     def test_4_status_typed_in_the_command_line_answers_in_the_log(self):
         ff = self.firefox

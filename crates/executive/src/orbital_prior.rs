@@ -7,6 +7,11 @@
 //! a cell whose ground is all rock keeps the mean of its heights, rocks included. For a tiled
 //! terrain the world holds a coarse overview of the route whose cells show bare ground
 //! (`docs/long-range.md`), which is averaged the same way.
+//!
+//! Departure from a real orbital map: this one is registered to the simulation frame exactly
+//! and has no height noise (a HiRISE DEM carries metres of registration error and decimetres
+//! of height noise), so fixes against it are unbiased by construction and the figures of
+//! `docs/results/2026-11-28-localization-scales.md` are best cases.
 
 use crate::World;
 use rovernav_core::{Grid2, GridGeometry};

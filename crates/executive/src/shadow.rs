@@ -11,6 +11,8 @@
 //!
 //! Departure from the paper: the shadow sees only what the driving navigator chose to sense
 //! (its own sensing requests are logged, not executed), as a checkout on the real rover would.
+//! The shadow's compute runs inside the navigator component's step, so a run with a shadow
+//! reports its navigation time (`compute_per_cycle.navigation_s`) with the shadow's included.
 
 use crate::messages::CommandMsg;
 use rovernav_core::{NavCommand, NavInput, Navigator, Point2, RoverConfig};

@@ -204,7 +204,13 @@ fn a_navcam_command_takes_a_stereo_pair_where_it_points_and_answers_with_the_ima
 
 #[test]
 fn one_motor_pivots_the_rover_about_the_held_wheels_and_is_answered_with_its_travel() {
-    let script = [(0, "mission pause"), (0, "motor left 0.3"), (1, "motor right 0.3"), (2, "mission abort")];
+    let script = [
+        (0, "mission pause"),
+        (0, "motor left 0.3"),
+        (1, "motor right 0.3"),
+        (2, "motor left 5"),
+        (2, "mission abort"),
+    ];
     let (op, log, start, outcome) = run(None, &script);
     assert_eq!(outcome, "aborted");
     let track = rovernav_core::RoverConfig::default().track;
@@ -224,4 +230,7 @@ fn one_motor_pivots_the_rover_about_the_held_wheels_and_is_answered_with_its_tra
     let said = metres_after(answer, "completed: ");
     assert!((said - 0.3).abs() < 0.03, "{answer}");
     assert!(op.reply_containing("`motor right 0.3` completed").is_some(), "{:?}", op.replies);
+    // More than half a turn in one command is refused (the answer could not tell the turn).
+    let refused = op.reply_containing("`motor left 5`").unwrap_or_else(|| panic!("{:?}", op.replies));
+    assert!(refused.starts_with("error:") && refused.contains("at most 1.57 m"), "{refused}");
 }

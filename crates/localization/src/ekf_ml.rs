@@ -57,13 +57,8 @@ pub struct EkfMlParams {
     /// cover is the drift since then, not since the start (see [`EkfMl`]'s window).
     pub match_horizon: f64,
     /// Unmodelled slip per metre driven (fraction, one sigma), added to the filter's position
-    /// variance each update as independent noise.
+    /// variance each update.
     pub slip_fraction: f64,
-    /// Systematic slip per metre driven since the last fused fix (fraction, one sigma): the
-    /// slip of one stretch of ground is the same from step to step (grade and soil change
-    /// slowly), so its error grows in proportion to the distance, not its square root; the
-    /// position standard deviation it adds is this fraction of the travel since the last fix.
-    pub correlated_slip_fraction: f64,
     /// Smallest heading half-width of the window (rad).
     pub min_window_yaw: f64,
     /// Largest heading half-width of the window (rad).
@@ -103,9 +98,6 @@ impl Default for EkfMlParams {
             window_growth: 0.1,
             match_horizon: 5.0,
             slip_fraction: 0.05,
-            // Off: at 0.03 the final NEES of development traverses (seeds 3002-3004, 120 m)
-            // fell to 0.10-0.55, below an honest 2 (docs/results/2026-11-28-localization-scales.md).
-            correlated_slip_fraction: 0.0,
             min_window_yaw: 0.03,
             max_window_yaw: 0.15,
             max_failure_probability: 0.5,
@@ -300,8 +292,6 @@ pub struct EkfMl {
     last_match: Option<MatchResult>,
     /// Estimated distance driven since the last fused fix (m).
     travel_since_fix: f64,
-    /// Odometry's travel since the last fused fix (m), without the fixes' corrections.
-    slip_travel: f64,
     /// Estimated position after the previous update.
     previous_position: Point2,
     /// How localisation targets are predicted.
@@ -331,7 +321,6 @@ impl EkfMl {
             stats: EkfMlStats::default(),
             last_match: None,
             travel_since_fix: 0.0,
-            slip_travel: 0.0,
             previous_position: Point2::new(initial.x, initial.y),
             target_params: TargetParams {
                 fov: config.mast_fov,
@@ -443,7 +432,6 @@ impl EkfMl {
             return;
         }
         self.travel_since_fix = 0.0;
-        self.slip_travel = 0.0;
         let mut relative = [[0.0; 3]; 3];
         for (i, row) in relative.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
@@ -527,24 +515,16 @@ impl Localizer for EkfMl {
         self.last_match_position = None;
         self.map_covariance = self.ekf.estimate().covariance;
         self.travel_since_fix = 0.0;
-        self.slip_travel = 0.0;
         self.previous_position = Point2::new(pose.x, pose.y);
     }
 
     fn update(&mut self, frame: &SensorFrame) {
-        let before = self.ekf.estimate().pose.pose2().position();
         self.ekf.update(frame);
         let here = self.ekf.estimate().pose.pose2().position();
         let step = here.dist(self.previous_position);
         self.travel_since_fix += step;
-        // Slip the odometry model leaves out: a position error growing with the distance, in
-        // part independent from step to step and in part the same since the last fix (its
-        // standard deviation `correlated_slip_fraction` times the odometry's travel since).
-        let driven = here.dist(before);
-        let (d0, d1) = (self.slip_travel, self.slip_travel + driven);
-        self.slip_travel = d1;
-        let correlated = self.params.correlated_slip_fraction.powi(2) * (d1 * d1 - d0 * d0);
-        self.ekf.add_pose_noise((self.params.slip_fraction * step).powi(2) + correlated, 0.0);
+        // Slip the odometry model leaves out: a position error growing with the distance.
+        self.ekf.add_pose_noise((self.params.slip_fraction * step).powi(2), 0.0);
         self.previous_position = here;
         let clouds: Vec<PointCloud> = frame.clouds.iter().filter(|c| !c.points.is_empty()).cloned().collect();
         if clouds.is_empty() {

@@ -304,7 +304,7 @@ impl Localizer for OrbitalMapLocalizer {
 
     fn reset(&mut self, pose: Pose3) {
         self.inner.reset(pose);
-        self.travel = 0.0;
+        (self.travel, self.side_looks, self.retries) = (0.0, 0, 0);
         self.previous = Point2::new(pose.x, pose.y);
     }
 

@@ -91,12 +91,6 @@ pub fn ekf_ml_params() -> Vec<Param<EkfMlParams>> {
             field: |c| Field::Real(&mut c.max_failure_probability),
         },
         Param {
-            name: "correlated_slip_fraction",
-            doc: "systematic slip: position sigma added per metre driven since the last fix",
-            unit: Unit::Weight,
-            field: |c| Field::Real(&mut c.correlated_slip_fraction),
-        },
-        Param {
             name: "max_fix_sigma_m",
             doc: "fixes with a larger position standard deviation are rejected",
             unit: Unit::PositiveMetres,

@@ -70,10 +70,6 @@ pub struct EvalLocalizationArgs {
     /// section 4.4; the "ekf-ml-targets" localiser) instead of straight back.
     #[arg(long)]
     localization_targets: bool,
-    /// The map matcher's systematic slip fraction (`ekf-ml`'s `correlated_slip_fraction`; 0
-    /// gives the filter as it was before that term).
-    #[arg(long)]
-    correlated_slip: Option<f64>,
     /// Also drive each seed with the "orbital-map" localiser.
     #[arg(long)]
     orbital: bool,
@@ -237,7 +233,6 @@ pub fn orbital_seed(
     navigator: &str,
     look_back: bool,
     fix_interval: f64,
-    correlated_slip: Option<f64>,
 ) -> anyhow::Result<(LoopResult, Vec<f64>, u64)> {
     let world = closed_loop_world(seed, length);
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
@@ -245,9 +240,7 @@ pub fn orbital_seed(
         &world,
         rovernav_executive::orbital_prior::ORBITAL_MAP_RESOLUTION_M,
     );
-    let mut params = OrbitalMapParams { fix_interval_m: fix_interval, ..Default::default() };
-    params.ekf_ml.correlated_slip_fraction =
-        correlated_slip.unwrap_or(params.ekf_ml.correlated_slip_fraction);
+    let params = OrbitalMapParams { fix_interval_m: fix_interval, ..Default::default() };
     let localizer = OrbitalMapLocalizer::new(&world.rover, initial, &map, params);
     let (result, localizer, truths) = drive_logged(&world, navigator, localizer, seed, look_back)?;
     let nees = localizer
@@ -269,12 +262,10 @@ pub fn closed_loop_seed(
     navigator: &str,
     look_back: bool,
     localization_targets: bool,
-    correlated_slip: Option<f64>,
 ) -> anyhow::Result<(LoopResult, LoopResult)> {
     let world = closed_loop_world(seed, length);
     let initial = Pose3 { x: world.start.x, y: world.start.y, yaw: world.start.yaw, ..Default::default() };
-    let mut params = EkfMlParams { select_targets: localization_targets, ..Default::default() };
-    params.correlated_slip_fraction = correlated_slip.unwrap_or(params.correlated_slip_fraction);
+    let params = EkfMlParams { select_targets: localization_targets, ..Default::default() };
     let matcher = EkfMl::with_params(&world.rover, initial, params);
     let (ml, _) = drive(&world, navigator, matcher, seed, look_back)?;
     let (dr, _) = drive(&world, navigator, DeadReckoning::new(&world.rover, initial), seed, look_back)?;
@@ -352,7 +343,6 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
                                 &args.navigator,
                                 look_back,
                                 args.localization_targets,
-                                args.correlated_slip,
                             )?
                         };
                         let mut r = SeedResult { seed, ml, dr, ..Default::default() };
@@ -363,7 +353,6 @@ pub fn run(args: EvalLocalizationArgs) -> anyhow::Result<()> {
                                 &args.navigator,
                                 look_back,
                                 args.fix_interval,
-                                args.correlated_slip,
                             )?;
                             (r.orbital, r.orbital_fix_nees, r.orbital_attempts) =
                                 (Some(o), fix_nees, attempts);

@@ -67,8 +67,11 @@ pub fn write_watch_summaries(
         return Ok(());
     }
     let path = out_dir.join("science.json");
-    let text = serde_json::to_string_pretty(summaries)? + "\n";
-    std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))
+    crate::output::write_atomic(&path, |bytes| {
+        serde_json::to_writer_pretty(&mut *bytes, summaries)?;
+        bytes.push(b'\n');
+        Ok(())
+    })
 }
 
 /// Runs `rovernav science`.

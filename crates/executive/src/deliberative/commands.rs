@@ -97,6 +97,13 @@ impl Deliberative {
                 // Skid steering with one side held: the centre runs on a circle of radius track / 2
                 // about the held wheels, so half the wheel travel, at curvature 2 / track.
                 let track = self.rover.track;
+                // At most a half turn per command, so the answer can tell the turn made.
+                if distance.abs() >= std::f64::consts::PI * track {
+                    return Ok(format!(
+                        "error: `{cmd}`: at most {:.2} m per command (half a turn on a {track:.2} m track)",
+                        std::f64::consts::PI * track - 0.005
+                    ));
+                }
                 let curvature = match side {
                     MotorSide::Left => -2.0 / track,
                     MotorSide::Right => 2.0 / track,

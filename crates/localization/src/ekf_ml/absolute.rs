@@ -74,7 +74,6 @@ impl EkfMl {
         self.last_match_position = self.last_match_position.map(moved);
         self.previous_position = after.position();
         self.travel_since_fix = 0.0;
-        self.slip_travel = 0.0;
         self.target = None;
         true
     }
