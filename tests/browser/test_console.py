@@ -189,10 +189,6 @@ class ConsoleInABrowser(unittest.TestCase):
         answer = wait("the turn's answer", lambda: [t for t in self.log_texts() if t.startswith("`turn 45") and "completed" in t])
         self.commander.find_element(By.CSS_SELECTOR, '#pad button[data-cmd="turn -45"]').click()
         wait("the turn back", lambda: [t for t in self.log_texts() if t.startswith("`turn -45") and "completed" in t])
-        # One motor: the left side forward pivots the rover about its right wheels (answered with
-        # its completion, or the guard that stopped it near a rock).
-        self.commander.find_element(By.CSS_SELECTOR, '#motors button[data-cmd="motor left STEP"]').click()
-        wait("the motor's answer", lambda: [t for t in self.log_texts() if t.startswith("`motor left 0.5` ") and ("completed" in t or "stopped" in t)])
         # The science pair: the Navcam button takes a stereo pair and the camera panel can show it.
         press("navcam")
         pair = wait("the pair's answer", lambda: [t for t in self.log_texts() if t.startswith("`navcam 0 -20` completed")])
