@@ -15,10 +15,17 @@ use rovernav_core::{Pose3, PoseEstimate};
 /// is singular.
 pub fn position_nees(estimate: &PoseEstimate, truth: &Pose3) -> Option<f64> {
     let c = &estimate.covariance;
-    let (ex, ey) = (estimate.pose.x - truth.x, estimate.pose.y - truth.y);
+    let block = [[c[0][0], c[0][1]], [c[1][0], c[1][1]]];
     let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
-    (det > 0.0 && det.is_finite())
-        .then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
+    squared_mahalanobis_2d(estimate.pose.x - truth.x, estimate.pose.y - truth.y, &block)
+        .filter(|_| det.is_finite())
+}
+
+/// e^T S^-1 e for a 2-vector `(ex, ey)` and a 2x2 covariance `s`; `None` when `s` is singular
+/// or not positive definite by its determinant.
+pub fn squared_mahalanobis_2d(ex: f64, ey: f64, s: &[[f64; 2]; 2]) -> Option<f64> {
+    let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+    (det > 0.0).then(|| (s[1][1] * ex * ex - (s[0][1] + s[1][0]) * ex * ey + s[0][0] * ey * ey) / det)
 }
 
 /// The standard normal quantile at `p` in (0, 1) (Abramowitz and Stegun 26.2.23).

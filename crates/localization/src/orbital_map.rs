@@ -199,11 +199,6 @@ impl OrbitalMapLocalizer {
         }
     }
 
-    /// The map matcher underneath.
-    pub fn inner(&self) -> &EkfMl {
-        &self.inner
-    }
-
     /// Resets the filter's position to (x, y) with standard deviation `sigma` (m), keeping the
     /// rest (e.g. to start from an uncertain landing position).
     pub fn reset_position(&mut self, x: f64, y: f64, sigma: f64) {
@@ -292,9 +287,7 @@ impl OrbitalMapLocalizer {
 pub fn innovation_nees(estimate: &PoseEstimate, fix: &MatchResult) -> Option<f64> {
     let (p, r) = (&estimate.covariance, &fix.covariance);
     let s = [[p[0][0] + r[0][0], p[0][1] + r[0][1]], [p[1][0] + r[1][0], p[1][1] + r[1][1]]];
-    let (ex, ey) = (fix.pose.x - estimate.pose.x, fix.pose.y - estimate.pose.y);
-    let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
-    (det > 0.0).then(|| (s[1][1] * ex * ex - (s[0][1] + s[1][0]) * ex * ey + s[0][0] * ey * ey) / det)
+    crate::consistency::squared_mahalanobis_2d(fix.pose.x - estimate.pose.x, fix.pose.y - estimate.pose.y, &s)
 }
 
 impl Localizer for OrbitalMapLocalizer {

@@ -45,9 +45,8 @@ impl MatchResult {
     /// covariance); `None` when that block is singular.
     pub fn position_nees(&self, x: f64, y: f64) -> Option<f64> {
         let c = &self.covariance;
-        let (ex, ey) = (self.pose.x - x, self.pose.y - y);
-        let det = c[0][0] * c[1][1] - c[0][1] * c[1][0];
-        (det > 0.0).then(|| (c[1][1] * ex * ex - (c[0][1] + c[1][0]) * ex * ey + c[0][0] * ey * ey) / det)
+        let block = [[c[0][0], c[0][1]], [c[1][0], c[1][1]]];
+        crate::consistency::squared_mahalanobis_2d(self.pose.x - x, self.pose.y - y, &block)
     }
 }
 
