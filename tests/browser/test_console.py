@@ -13,24 +13,21 @@ import json
 import math
 import os
 import shutil
-import subprocess
 import tempfile
 import time
 import unittest
 import urllib.error
 import urllib.request
 
+from console_server import START, start_serve, wait
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
 from selenium.webdriver.common.keys import Keys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-BIN = os.environ.get("ROVERNAV_BIN", os.path.join(ROOT, "target", "release", "rovernav"))
 FLAGS = ("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
          "--disable-background-networking --disable-component-update --disable-sync").split()
-START = (5.0, 5.0)  # the default mission's start
 WAYPOINT = (8.0, 9.0)
 GOAL = (12.0, 13.0)
 KEEP_OUT = [(16.0, 4.0), (19.0, 4.0), (17.5, 7.0)]  # off the way, so the run is unchanged by it
@@ -45,30 +42,11 @@ def browser(user_dir):
     return webdriver.Chrome(options=options, service=service)
 
 
-def wait(what, pred, timeout=60.0):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = pred()
-        if value:
-            return value
-        time.sleep(0.2)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
-
-
 class ConsoleInABrowser(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.mkdtemp(prefix="rovernav-browser-")
-        cls.out = os.path.join(cls.tmp, "run")
-        token_file = os.path.join(cls.tmp, "token")
-        with open(token_file, "w") as f:
-            f.write("browser-test-token\n")
-        cls.server = subprocess.Popen(
-            [BIN, "serve", os.path.join(ROOT, "missions", "default.toml"), "--wait", "--speed", "30",
-             "--listen", "127.0.0.1:0", "--token-file", token_file, "--out", cls.out, "--exit-when-done"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        cls.url = cls.server.stdout.readline().strip()
-        assert cls.url.endswith("/?token=browser-test-token"), f"first line: {cls.url!r}"
+        cls.server, cls.url, cls.out = start_serve(cls.tmp, "browser-test-token")
         cls.base = cls.url.split("/?")[0]
         cls.commander = browser(os.path.join(cls.tmp, "chrome-a"))
         cls.watcher = None

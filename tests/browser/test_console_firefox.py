@@ -21,27 +21,10 @@ import threading
 import time
 import unittest
 
+from console_server import START, drain, start_serve, wait
 from websockets.sync.client import connect
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-BIN = os.environ.get("ROVERNAV_BIN", os.path.join(ROOT, "target", "release", "rovernav"))
-START = (5.0, 5.0)  # the default mission's start
 GOAL = (12.0, 13.0)
-
-
-def drain(stream):
-    """Reads a child's output to its end on a thread, so a full pipe never blocks the child."""
-    threading.Thread(target=lambda: [None for _ in stream], daemon=True).start()
-
-
-def wait(what, pred, timeout=60.0):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        value = pred()
-        if value:
-            return value
-        time.sleep(0.2)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
 class Firefox:
@@ -125,18 +108,7 @@ class ConsoleInFirefox(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.mkdtemp(prefix="rovernav-firefox-")
-        cls.out = os.path.join(cls.tmp, "run")
-        token_file = os.path.join(cls.tmp, "token")
-        with open(token_file, "w") as f:
-            f.write("firefox-test-token\n")
-        cls.server = subprocess.Popen(
-            [BIN, "serve", os.path.join(ROOT, "missions", "default.toml"), "--wait", "--speed", "30",
-             "--listen", "127.0.0.1:0", "--token-file", token_file, "--out", cls.out, "--exit-when-done"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        cls.url = cls.server.stdout.readline().strip()
-        assert cls.url.endswith("/?token=firefox-test-token"), f"first line: {cls.url!r}"
-        drain(cls.server.stdout)
-        drain(cls.server.stderr)
+        cls.server, cls.url, cls.out = start_serve(cls.tmp, "firefox-test-token")
         cls.base = cls.url.split("/?")[0]
         os.makedirs(os.path.join(cls.tmp, "profile"))
         cls.firefox = Firefox(os.path.join(cls.tmp, "profile"))
