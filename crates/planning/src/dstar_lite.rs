@@ -21,18 +21,40 @@ impl Model for CentreGraph {
 
     #[inline]
     fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64 {
-        (0..8).map(|k| Self::via(lat, g, s, k)).fold(f64::INFINITY, f64::min)
+        // `via` for the 8 directions written out with the cell's own cost loaded once and a
+        // diagonal's side cells checked only when its far node has a value; the same edge
+        // arithmetic, so the same value.
+        let cost = &lat.cost;
+        let cu = cost[s] as f64;
+        let mut best = f64::INFINITY;
+        for k in 0..8 {
+            let n = lat.step(s, k);
+            let gn = g[n];
+            if gn.is_infinite() {
+                continue;
+            }
+            let e = 0.5 * (cu + cost[n] as f64);
+            let e = if k % 2 == 0 {
+                e
+            } else if cost[lat.step(s, k - 1)].is_infinite() || cost[lat.step(s, (k + 1) % 8)].is_infinite() {
+                continue;
+            } else {
+                e * std::f64::consts::SQRT_2
+            };
+            best = best.min(e + gn);
+        }
+        best
     }
 
     #[inline]
     fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64 {
         let gn = g[lat.step(s, k)];
-        if gn.is_infinite() { f64::INFINITY } else { lat.edge(s, k) + gn }
+        if gn.is_infinite() { f64::INFINITY } else { lat.centre_edge(s, k) + gn }
     }
 
     #[inline]
-    fn h(lat: &Lattice, a: usize, b: usize) -> f64 {
-        lat.octile(a, b)
+    fn h_rc(dr: usize, dc: usize) -> f64 {
+        crate::octile_distance(dr, dc)
     }
 
     fn extract(

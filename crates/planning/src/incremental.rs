@@ -20,8 +20,22 @@ pub(crate) trait Model {
     /// The value of `s` through the neighbour in direction `k` only (after that neighbour's g
     /// decreased, `rhs(s) = min(rhs(s), via)` keeps `rhs` exact).
     fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64;
+    /// `via`, or when that is not below `bound`, possibly any value not below `bound` either:
+    /// what an expansion needs to decide whether `s`'s `rhs` (the bound) improves, and by how
+    /// much when it does. Lets a model skip work that cannot change the outcome.
+    #[inline]
+    fn via_below(lat: &Lattice, g: &[f64], s: usize, k: usize, bound: f64) -> f64 {
+        let _ = bound;
+        Self::via(lat, g, s, k)
+    }
+    /// Consistent lower bound on the cost between two nodes `dr` rows and `dc` columns apart.
+    fn h_rc(dr: usize, dc: usize) -> f64;
     /// Consistent lower bound on the cost between two nodes.
-    fn h(lat: &Lattice, a: usize, b: usize) -> f64;
+    #[inline]
+    fn h(lat: &Lattice, a: usize, b: usize) -> f64 {
+        let ((ar, ac), (br, bc)) = (lat.row_col(a), lat.row_col(b));
+        Self::h_rc(ar.abs_diff(br), ac.abs_diff(bc))
+    }
     /// The path from start to goal following the values `g`: points in grid units and the
     /// polyline's cost, or `None` when it cannot be followed.
     fn extract(
@@ -68,6 +82,8 @@ pub(crate) struct Engine<M: Model> {
     start: usize,
     goal: usize,
     last_start: usize,
+    /// Padded row and column of `start` (the keys' heuristic is measured from it).
+    start_rc: (usize, usize),
     km: f64,
     searching: bool,
     expansions: usize,
@@ -88,6 +104,7 @@ impl<M: Model> Default for Engine<M> {
             start: 0,
             goal: 0,
             last_start: 0,
+            start_rc: (0, 0),
             km: 0.0,
             searching: false,
             expansions: 0,
@@ -152,6 +169,7 @@ impl<M: Model> Engine<M> {
         self.km += M::h(lat, self.last_start, s);
         self.last_start = s;
         self.start = s;
+        self.start_rc = lat.row_col(s);
     }
 
     /// Applies cost changes and re-evaluates the nodes whose edges changed.
@@ -202,6 +220,7 @@ impl<M: Model> Engine<M> {
         self.touched_list.clear();
         self.heap.clear();
         self.start = start;
+        self.start_rc = self.lat.as_ref().expect("lattice").row_col(start);
         self.last_start = start;
         self.goal = goal;
         self.km = 0.0;
@@ -235,8 +254,15 @@ impl<M: Model> Engine<M> {
     #[inline]
     fn key(&self, n: usize) -> Key {
         let lat = self.lat.as_ref().expect("lattice");
-        let m = self.g[n].min(self.rhs[n]);
-        [m + M::h(lat, self.start, n) + self.km, m]
+        Self::key_with(lat, self.start_rc, self.km, self.g[n].min(self.rhs[n]), n)
+    }
+
+    /// The key `[m + h(start, n) + km, m]` of node `n` with `m = min(g, rhs)`, the heuristic
+    /// from the cached start row and column (the same value as `M::h(lat, start, n)`).
+    #[inline(always)]
+    fn key_with(lat: &Lattice, start_rc: (usize, usize), km: f64, m: f64, n: usize) -> Key {
+        let (r, c) = lat.row_col(n);
+        [m + M::h_rc(r.abs_diff(start_rc.0), c.abs_diff(start_rc.1)) + km, m]
     }
 
     #[inline]
@@ -253,7 +279,9 @@ impl<M: Model> Engine<M> {
     fn compute_shortest_path(&mut self) {
         loop {
             let top = self.heap.top_key();
-            let start_key = self.key(self.start);
+            // h(start, start) = h_rc(0, 0): no division.
+            let m = self.g[self.start].min(self.rhs[self.start]);
+            let start_key = [m + M::h_rc(0, 0) + self.km, m];
             let start_consistent = self.consistent(self.start);
             let done = !key_less(top, start_key) && start_consistent;
             if done || self.heap.len() == 0 {
@@ -277,7 +305,7 @@ impl<M: Model> Engine<M> {
                     if !lat.valid[s] || s == self.goal {
                         continue;
                     }
-                    let via = M::via(&lat, &self.g, s, (k + 4) % 8);
+                    let via = M::via_below(&lat, &self.g, s, (k + 4) % 8, self.rhs[s]);
                     if improves(via, self.rhs[s]) {
                         self.set_rhs(s, via);
                         self.update_vertex_with(&lat, s);
@@ -316,8 +344,7 @@ impl<M: Model> Engine<M> {
     #[inline]
     fn update_vertex_with(&mut self, lat: &Lattice, n: usize) {
         if !self.consistent(n) {
-            let m = self.g[n].min(self.rhs[n]);
-            let k = [m + M::h(lat, self.start, n) + self.km, m];
+            let k = Self::key_with(lat, self.start_rc, self.km, self.g[n].min(self.rhs[n]), n);
             self.heap.push_or_update(n, k);
         } else {
             self.heap.remove(n);

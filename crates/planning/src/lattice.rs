@@ -29,6 +29,9 @@ pub(crate) struct Lattice {
     pub off: [isize; 8],
     /// Which graph the nodes belong to.
     pub graph: GraphKind,
+    /// `ceil(2^64 / w)`: `n / w` is the high half of `n * w_magic` for every `n < 2^32`
+    /// (Granlund and Montgomery 1994), a multiplication instead of a division.
+    w_magic: u64,
 }
 
 impl Lattice {
@@ -52,7 +55,8 @@ impl Lattice {
             valid[base..base + node_cols].fill(true);
         }
         let wi = w as isize;
-        Self { rows, cols, w, cost, valid, off: [1, wi + 1, wi, wi - 1, -1, -wi - 1, -wi, -wi + 1], graph }
+        let off = [1, wi + 1, wi, wi - 1, -1, -wi - 1, -wi, -wi + 1];
+        Self { rows, cols, w, cost, valid, off, graph, w_magic: (u64::MAX / w as u64).wrapping_add(1) }
     }
 
     /// Number of indices.
@@ -93,6 +97,23 @@ impl Lattice {
         self.cost[i] = cost;
     }
 
+    /// Cost of the cell-centre edge from cell `n` in direction `k` (infinity when not
+    /// traversable): [`Lattice::edge`] on [`GraphKind::CellCentres`] without the match on the
+    /// graph, the same arithmetic.
+    #[inline(always)]
+    pub fn centre_edge(&self, n: usize, k: usize) -> f64 {
+        let (cu, cv) = (self.cost[n], self.cost[self.step(n, k)]);
+        if k.is_multiple_of(2) {
+            0.5 * (cu as f64 + cv as f64)
+        } else if self.cost[self.step(n, k - 1)].is_infinite()
+            || self.cost[self.step(n, (k + 1) % 8)].is_infinite()
+        {
+            f64::INFINITY
+        } else {
+            0.5 * (cu as f64 + cv as f64) * SQRT_2
+        }
+    }
+
     /// Cost of the edge from node `n` in direction `k` (infinity when not traversable).
     ///
     /// Cell centres: the mean of the two cells' costs times the edge length; a diagonal also
@@ -103,21 +124,7 @@ impl Lattice {
     pub fn edge(&self, n: usize, k: usize) -> f64 {
         let w = self.w;
         match self.graph {
-            GraphKind::CellCentres => {
-                let m = self.step(n, k);
-                let (cu, cv) = (self.cost[n], self.cost[m]);
-                if k.is_multiple_of(2) {
-                    0.5 * (cu as f64 + cv as f64)
-                } else {
-                    let side_a = self.cost[self.step(n, k - 1)];
-                    let side_b = self.cost[self.step(n, (k + 1) % 8)];
-                    if side_a.is_infinite() || side_b.is_infinite() {
-                        f64::INFINITY
-                    } else {
-                        0.5 * (cu as f64 + cv as f64) * SQRT_2
-                    }
-                }
-            }
+            GraphKind::CellCentres => self.centre_edge(n, k),
             GraphKind::CornerNodes => {
                 let c = &self.cost;
                 match k {
@@ -134,31 +141,18 @@ impl Lattice {
         }
     }
 
-    /// Padded row and column of an index. In 32 bits when the index space fits (every grid a
-    /// planner takes in practice): a 32-bit division is several times cheaper than a 64-bit
-    /// one, and the heuristics divide twice per key.
+    /// Padded row and column of an index, the quotient by a multiplication (exact for every
+    /// index below 2^32 and `w` below 2^32: the error of `w_magic` is below `w`, so
+    /// `n * w_magic / 2^64` is within `n / 2^64 < 1 / w` of `n / w`; larger indices divide).
+    /// The heuristics take two of these per key.
     #[inline]
-    fn row_col(&self, n: usize) -> (usize, usize) {
-        if let (Ok(n32), Ok(w32)) = (u32::try_from(n), u32::try_from(self.w)) {
-            ((n32 / w32) as usize, (n32 % w32) as usize)
+    pub fn row_col(&self, n: usize) -> (usize, usize) {
+        if n >> 32 == 0 && self.w >> 32 == 0 && self.w > 1 {
+            let q = ((n as u128 * self.w_magic as u128) >> 64) as usize;
+            (q, n - q * self.w)
         } else {
             (n / self.w, n % self.w)
         }
-    }
-
-    /// Octile distance between two nodes (a lower bound on path cost since costs are >= 1).
-    #[inline]
-    pub fn octile(&self, a: usize, b: usize) -> f64 {
-        let ((ar, ac), (br, bc)) = (self.row_col(a), self.row_col(b));
-        crate::octile_distance(ar.abs_diff(br), ac.abs_diff(bc))
-    }
-
-    /// Euclidean distance between two nodes in grid units.
-    #[inline]
-    pub fn euclid(&self, a: usize, b: usize) -> f64 {
-        let ((ar, ac), (br, bc)) = (self.row_col(a), self.row_col(b));
-        let (dr, dc) = (ar.abs_diff(br) as f64, ac.abs_diff(bc) as f64);
-        (dr * dr + dc * dc).sqrt()
     }
 
     /// The nodes whose incident edges change when `cell` changes cost.
@@ -179,6 +173,25 @@ impl Lattice {
             }
             GraphKind::CornerNodes => {
                 out.extend_from_slice(&[n, n + 1, n + self.w, n + self.w + 1]);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn row_col_by_multiplication_equals_division() {
+        for cols in [1, 2, 5, 13, 29, 61, 125, 253, 509, 997, 1021, 4093, 65533, 1 << 20] {
+            let lat = Lattice::new(&CostGrid::uniform(1, cols, 1.0).unwrap(), GraphKind::CellCentres);
+            let w = lat.w;
+            let mut ns: Vec<usize> =
+                (0..5000).chain((1..64).map(|k| k * w - 1)).chain((1..64).map(|k| k * w)).collect();
+            ns.extend([u32::MAX as usize, u32::MAX as usize - 1, (u32::MAX as usize / w) * w, (1 << 33) + 7]);
+            for n in ns {
+                assert_eq!(lat.row_col(n), (n / w, n % w), "n {n} w {w}");
             }
         }
     }
