@@ -72,6 +72,12 @@ pub mod topics {
     /// Deliberative layer -> displays and logs: a science watch's compact summary when it ends
     /// (events by kind, times, positions in the images, what was sent, bytes against budget).
     pub const SCIENCE_SUMMARY: Topic<crate::deliberative::WatchSummary> = Topic::new("/science/summary");
+    /// Deliberative layer -> platform: a Navcam pair to take alongside each of the navigator's
+    /// sensing commands (visual target tracking's track-only mode), or none.
+    pub const PLATFORM_RIDE_ALONG: Topic<RideAlongMsg> = Topic::new("/platform/ride_along");
+    /// Deliberative layer -> displays and logs: each image visual target tracking saw, with the
+    /// template, the match and its score, and the target's estimate.
+    pub const VTT_TRACK: Topic<crate::deliberative::VttTrackMsg> = Topic::new("/vtt/track");
     /// Reflexive layer -> deliberative layer: the state of each command it works on.
     pub const TASK_STATUS: Topic<TaskStatusMsg> = Topic::new("/executive/task_status");
     /// Pose estimator -> everyone: the pose estimate after each frame.
@@ -107,6 +113,8 @@ pub mod topics {
             row(ARM_COMMAND),
             row(ARM_PLACEMENT),
             row(SCIENCE_SUMMARY),
+            row(PLATFORM_RIDE_ALONG),
+            row(VTT_TRACK),
             row(TASK_STATUS),
             row(LOCALIZATION_ESTIMATE),
             row(LOCALIZATION_RESET),
@@ -178,6 +186,15 @@ pub struct HoldMsg {
     /// Hold in the power system's sleep mode (no sampling until the end; SR2's SLEEP mode).
     #[serde(default)]
     pub sleep: bool,
+}
+
+/// Pictures the platform takes alongside the navigator's own sensing commands, exposed while
+/// that sensing holds the rover still: they cost the run no time and change nothing it does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct RideAlongMsg {
+    /// The Navcam head's body-frame pan and tilt (rad) for a pair with each of the navigator's
+    /// sensing commands; none: take no pictures.
+    pub navcam: Option<[f64; 2]>,
 }
 
 /// What produced a frame.
@@ -487,6 +504,8 @@ mod tests {
         };
         plain(DriveToMsg { task: 1, goal });
         plain(HoldMsg { until_s: 30.0, sleep: false });
+        plain(RideAlongMsg { navcam: Some([0.25, -0.3]) });
+        plain(RideAlongMsg { navcam: None });
         plain(CancelMsg { task: 2 });
         for action in [ArmAction::PlaceInstrument, ArmAction::Scoop] {
             plain(ArmTaskMsg { task: 3, action, target: [1.0, 2.0] });

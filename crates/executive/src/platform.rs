@@ -10,7 +10,7 @@
 pub use crate::arm_server::{ArmConfig, ToolingArm};
 use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
 use crate::messages::{
-    FrameMsg, FrameSource, HoldMsg, MotionRequest, Origin, TaskState, TaskStatusMsg, topics,
+    FrameMsg, FrameSource, HoldMsg, MotionRequest, Origin, RideAlongMsg, TaskState, TaskStatusMsg, topics,
 };
 use rovernav_bus::{Bus, BusError, Subscriber};
 use rovernav_core::{NavCommand, Pose3, SensorFrame};
@@ -18,6 +18,8 @@ use rovernav_sim::{Fault, Simulator};
 
 /// Longest hold the platform executes in one step (s), so a bad hold time cannot spin forever.
 const MAX_HOLD_S: f64 = 3600.0;
+/// Seed stream of the pictures taken alongside the navigator's sensing (xor the frame number).
+const RIDE_ALONG_SEED: u64 = 0x7674_7472_6163_6b00;
 
 /// When a scheduled fault starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,6 +96,9 @@ pub struct SimPlatform {
     injected: Vec<InjectedFault>,
     commands: Option<Subscriber<MotionRequest>>,
     holds: Option<Subscriber<HoldMsg>>,
+    ride_along: Option<Subscriber<RideAlongMsg>>,
+    /// The Navcam pointing (pan, tilt) of the pairs taken alongside the navigator's sensing.
+    ride_navcam: Option<[f64; 2]>,
     seq: u64,
     executed_count: u64,
     executed: Vec<Executed>,
@@ -109,6 +114,8 @@ impl SimPlatform {
             injected: Vec::new(),
             commands: None,
             holds: None,
+            ride_along: None,
+            ride_navcam: None,
             seq: 0,
             executed_count: 0,
             executed: Vec::new(),
@@ -199,7 +206,16 @@ impl SimPlatform {
             return Ok(());
         }
         self.inject_due(self.executed_count + 1);
-        let frame = self.sim.execute(&command);
+        let mut frame = self.sim.execute(&command);
+        if let (Origin::Navigator, NavCommand::Sense(_), Some([pan, tilt])) =
+            (request.origin, &command, self.ride_navcam)
+        {
+            // Exposed while the navigator's own sensing holds the rover still: the pair changes
+            // nothing the run does (no time, energy or draws of the simulator's noise streams).
+            let seed = RIDE_ALONG_SEED ^ (self.seq + 1);
+            let pair = rovernav_sim::navcam::Pair::Navcam { pan, tilt };
+            frame.images.extend(self.sim.pictures_alongside(pair, seed));
+        }
         self.executed_count += 1;
         if let Origin::Task(task) = request.origin {
             let empty: Vec<&str> =
@@ -226,6 +242,16 @@ impl SimPlatform {
         Ok(())
     }
 
+    /// Takes the latest ride-along request, if any came.
+    fn take_ride_along(&mut self, bus: &mut Bus) -> Result<(), BusError> {
+        if let Some(sub) = &self.ride_along
+            && let Some(last) = bus.take(sub)?.pop()
+        {
+            self.ride_navcam = last.navcam;
+        }
+        Ok(())
+    }
+
     /// The latest time the holds asked for, and whether any asked to sleep.
     fn take_holds(&mut self, bus: &mut Bus) -> Result<Option<(f64, bool)>, BusError> {
         let Some(holds) = &self.holds else { return Ok(None) };
@@ -242,7 +268,11 @@ impl Component for SimPlatform {
 
     fn ports(&self) -> Ports {
         Ports {
-            inputs: vec![Port::of(topics::PLATFORM_COMMAND), Port::of(topics::PLATFORM_HOLD)],
+            inputs: vec![
+                Port::of(topics::PLATFORM_COMMAND),
+                Port::of(topics::PLATFORM_HOLD),
+                Port::of(topics::PLATFORM_RIDE_ALONG),
+            ],
             outputs: vec![Port::of(topics::PLATFORM_FRAME), Port::of(topics::TASK_STATUS)],
         }
     }
@@ -250,6 +280,7 @@ impl Component for SimPlatform {
     fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
         self.commands = Some(bus.subscribe(topics::PLATFORM_COMMAND)?);
         self.holds = Some(bus.subscribe(topics::PLATFORM_HOLD)?);
+        self.ride_along = Some(bus.subscribe(topics::PLATFORM_RIDE_ALONG)?);
         Ok(())
     }
 
@@ -266,6 +297,7 @@ impl Component for SimPlatform {
 
     fn step(&mut self, ctx: &mut Ctx<'_>) -> Result<(), ComponentFault> {
         self.hold(ctx.bus, ctx.time_s, false)?;
+        self.take_ride_along(ctx.bus)?;
         let commands = match &self.commands {
             Some(s) => ctx.bus.take(s)?,
             None => Vec::new(),
@@ -283,6 +315,7 @@ impl Component for SimPlatform {
     /// keep sampling through holds.
     fn idle(&mut self, ctx: &mut Ctx<'_>, state: JausState) -> Result<(), ComponentFault> {
         self.hold(ctx.bus, ctx.time_s, false)?;
+        self.take_ride_along(ctx.bus)?;
         let commands = match &self.commands {
             Some(s) => ctx.bus.take(s)?,
             None => Vec::new(),

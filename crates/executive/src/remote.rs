@@ -23,7 +23,7 @@
 //! rover`); [`LocalLink`] fills it in process, through JSON, for tests.
 
 use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
-use crate::messages::{FrameMsg, HoldMsg, MotionRequest, PoseMsg, TaskStatusMsg, topics};
+use crate::messages::{FrameMsg, HoldMsg, MotionRequest, PoseMsg, RideAlongMsg, TaskStatusMsg, topics};
 use crate::platform::{ScheduledFault, SimPlatform};
 use crate::report::HazardEvent;
 use crate::scoring::Scorer;
@@ -76,6 +76,9 @@ pub struct PlatformRequest {
     pub commands: Vec<MotionRequest>,
     /// Holds queued on `/platform/hold`, oldest first.
     pub holds: Vec<HoldMsg>,
+    /// Ride-along requests queued on `/platform/ride_along`, oldest first.
+    #[serde(default)]
+    pub ride_along: Vec<RideAlongMsg>,
 }
 
 /// A message the platform published during a call.
@@ -231,6 +234,9 @@ impl PlatformServer {
         for h in &request.holds {
             self.bus.publish(topics::PLATFORM_HOLD, *h)?;
         }
+        for r in &request.ride_along {
+            self.bus.publish(topics::PLATFORM_RIDE_ALONG, *r)?;
+        }
         let mut ctx = Ctx { bus: &mut self.bus, time_s: request.time_s };
         match &request.call {
             PlatformCall::Initialize { mission, seed } => {
@@ -306,6 +312,9 @@ pub struct RemotePlatform {
     seed: u64,
     commands: Option<Subscriber<MotionRequest>>,
     holds: Option<Subscriber<HoldMsg>>,
+    ride_along: Option<Subscriber<RideAlongMsg>>,
+    /// Ride-along requests taken from the bus, not sent yet.
+    ride_queue: Vec<RideAlongMsg>,
     seq: u64,
     sim_time_s: f64,
     initialized: bool,
@@ -321,6 +330,8 @@ impl RemotePlatform {
             seed,
             commands: None,
             holds: None,
+            ride_along: None,
+            ride_queue: Vec::new(),
             seq: 0,
             sim_time_s: 0.0,
             initialized: false,
@@ -353,7 +364,8 @@ impl RemotePlatform {
         holds: Vec<HoldMsg>,
     ) -> Result<PlatformReply, LinkError> {
         self.seq += 1;
-        let request = PlatformRequest { seq: self.seq, time_s, call, commands, holds };
+        let ride_along = std::mem::take(&mut self.ride_queue);
+        let request = PlatformRequest { seq: self.seq, time_s, call, commands, holds, ride_along };
         let reply = self.link.exchange(&request)?;
         if reply.seq != request.seq {
             return Err(LinkError(format!("reply {} to request {}", reply.seq, request.seq)));
@@ -372,9 +384,15 @@ impl RemotePlatform {
             Some(s) => ctx.bus.take(s)?.iter().map(|h| **h).collect(),
             None => Vec::new(),
         };
+        if let Some(s) = &self.ride_along {
+            self.ride_queue.extend(ctx.bus.take(s)?.iter().map(|r| **r));
+        }
         // With nothing queued and the clock not past the simulator's, the platform would do
         // nothing (no hold, no command): spare the round trip.
-        let nothing_to_do = commands.is_empty() && holds.is_empty() && ctx.time_s <= self.sim_time_s;
+        let nothing_to_do = commands.is_empty()
+            && holds.is_empty()
+            && self.ride_queue.is_empty()
+            && ctx.time_s <= self.sim_time_s;
         if self.initialized && !matches!(call, PlatformCall::Initialize { .. }) && nothing_to_do {
             return Ok(());
         }
@@ -406,7 +424,11 @@ impl Component for RemotePlatform {
 
     fn ports(&self) -> Ports {
         Ports {
-            inputs: vec![Port::of(topics::PLATFORM_COMMAND), Port::of(topics::PLATFORM_HOLD)],
+            inputs: vec![
+                Port::of(topics::PLATFORM_COMMAND),
+                Port::of(topics::PLATFORM_HOLD),
+                Port::of(topics::PLATFORM_RIDE_ALONG),
+            ],
             outputs: vec![Port::of(topics::PLATFORM_FRAME), Port::of(topics::TASK_STATUS)],
         }
     }
@@ -414,6 +436,7 @@ impl Component for RemotePlatform {
     fn connect(&mut self, bus: &mut Bus) -> Result<(), BusError> {
         self.commands = Some(bus.subscribe(topics::PLATFORM_COMMAND)?);
         self.holds = Some(bus.subscribe(topics::PLATFORM_HOLD)?);
+        self.ride_along = Some(bus.subscribe(topics::PLATFORM_RIDE_ALONG)?);
         Ok(())
     }
 

@@ -441,6 +441,24 @@ impl Simulator {
         frame.clouds.push(cloud);
     }
 
+    /// Renders a pair at the current true pose and clock without changing the simulator (no
+    /// time, energy or noise draws of its own streams; `seed` draws the pictures' noise):
+    /// pictures exposed while another command's sensing holds the rover still, so that taking
+    /// them cannot change the run (visual target tracking's track-only mode).
+    pub fn pictures_alongside(&self, pair: navcam::Pair, seed: u64) -> [CameraImage; 2] {
+        navcam::capture_pair(
+            &self.terrain,
+            &self.field,
+            &self.rover,
+            &self.truth,
+            &self.model.stereo,
+            &self.model.navcam,
+            pair,
+            self.time,
+            seed,
+        )
+    }
+
     /// Takes a stereo pair's pictures: no range, not a sensing action.
     fn take_pictures(&mut self, pair: navcam::Pair, frame: &mut SensorFrame) {
         let seed: u64 = self.image_rng.random();

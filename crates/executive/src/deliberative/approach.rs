@@ -15,6 +15,7 @@
 //! `track ROW COL` designates a pixel of the last left Navcam image the rover took; `track X Y
 //! Z` a site point. Both add an approach task after the current step and drive the rover there.
 
+use super::vtt_telemetry::VttTrackMsg;
 use super::{Deliberative, TaskKind};
 use crate::messages::{
     CommandMsg, DriveToMsg, FrameMsg, ImageMsg, MotionRequest, Origin, SenseMsg, TaskState, TaskStatusMsg,
@@ -52,6 +53,8 @@ pub(super) struct ApproachRun {
     phase: Phase,
     /// The current command finished; with the frame that ended it, if the platform sent one.
     done: Option<Option<u64>>,
+    /// The frame of the current Navcam pair.
+    images_seq: u64,
     /// The Navcam pair of the current imaging command.
     images: Vec<ImageMsg>,
     /// Every image's observation, in order (the target's estimates along the way).
@@ -66,7 +69,7 @@ pub(super) struct LastNavcam {
 }
 
 /// The left and right Navcam images of a frame, as the tracker's images, with pan and tilt.
-fn pair_of(images: &[ImageMsg]) -> Option<(GreyF32, GreyF32, f64, f64)> {
+pub(super) fn pair_of(images: &[ImageMsg]) -> Option<(GreyF32, GreyF32, f64, f64)> {
     let get = |name: &str| images.iter().find(|i| i.camera == name);
     let (l, r) = (get("navcam_left")?, get("navcam_right")?);
     Some((grey_f32(l.width, l.height, &l.pixels)?, grey_f32(r.width, r.height, &r.pixels)?, l.pan, l.tilt))
@@ -86,6 +89,7 @@ impl Deliberative {
             approach,
             phase: Phase::Imaging,
             done: None,
+            images_seq: 0,
             images: Vec::new(),
             observations: Vec::new(),
         };
@@ -98,6 +102,7 @@ impl Deliberative {
                 };
                 let run = self.approaches.get_mut(&id).expect("just inserted");
                 run.images = last.images;
+                run.images_seq = last.frame_seq;
                 run.done = Some(Some(last.frame_seq));
                 Ok(())
             }
@@ -139,6 +144,7 @@ impl Deliberative {
         let Some(task) = self.tasks.iter().find(|t| t.command == Some(cmd)) else { return };
         if let Some(run) = self.approaches.get_mut(&task.id) {
             run.images = f.images.clone();
+            run.images_seq = f.seq;
             run.done = Some(Some(f.seq));
         }
     }
@@ -194,9 +200,24 @@ impl Deliberative {
                     return self.fail_now(i, "approach: the frame has no Navcam pair".into());
                 };
                 let pair = NavcamPair { left: &left, right: &right, pan, tilt };
+                let t = run.images.iter().find(|i| i.camera == "navcam_left").map_or(0.0, |i| i.t);
+                let head = VttTrackMsg {
+                    task: id,
+                    mode: "approach".into(),
+                    image_index: run.approach.images() + 1,
+                    frame_seq: run.images_seq,
+                    t,
+                    pan,
+                    tilt,
+                    ..VttTrackMsg::default()
+                };
                 match run.approach.observe(&pair, &pose) {
-                    Ok(o) => run.observations.push(o),
+                    Ok(o) => {
+                        bus.publish(topics::VTT_TRACK, VttTrackMsg::observed(head, &o))?;
+                        run.observations.push(o);
+                    }
                     Err(e) => {
+                        bus.publish(topics::VTT_TRACK, VttTrackMsg { status: format!("lost: {e}"), ..head })?;
                         let why = format!("{e}; rover stopped, asking for help");
                         return self.fail_now(i, why);
                     }
@@ -278,6 +299,6 @@ fn drive(distance: f64) -> CommandMsg {
     CommandMsg::Drive { distance, curvature: 0.0, guard: Default::default() }
 }
 
-fn pose_of(p: &crate::messages::PoseMsg) -> Pose3 {
+pub(super) fn pose_of(p: &crate::messages::PoseMsg) -> Pose3 {
     Pose3 { x: p.x, y: p.y, z: p.z, roll: p.roll, pitch: p.pitch, yaw: p.yaw }
 }

@@ -24,12 +24,15 @@ mod science_watch;
 mod tasks;
 #[cfg(test)]
 mod tests;
+mod track_only;
+mod vtt_telemetry;
 
 pub use approach::{NAVIGATOR_LEG_MIN_M, TRACK_STANDOFF_M};
 pub use direct::stop_cause;
 pub use science_summary::{EventSummary, ImageSummary, WatchSummary};
 pub use science_watch::{MAX_INTERVAL_S, Watch, WatchKind, WatchSpec};
 pub use tasks::{Designation, Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
+pub use vtt_telemetry::{MatchMsg, TemplateMsg, VttTrackMsg};
 
 use crate::components::{JausState, Port};
 use crate::fault_protection::{Diagnosis, FaultProtection, FaultProtectionConfig};
@@ -101,6 +104,10 @@ pub struct Deliberative {
     navcam_width: usize,
     /// Approaches in progress, by task id.
     approaches: BTreeMap<u64, approach::ApproachRun>,
+    /// Track-only tasks in progress, by task id.
+    tracks: BTreeMap<u64, track_only::TrackRun>,
+    /// The Navcam pointing last asked of the platform alongside the navigator's sensing.
+    ride_along: Option<[f64; 2]>,
     /// The last Navcam pair taken (what `track ROW COL` designates on).
     last_navcam: Option<approach::LastNavcam>,
     /// The terrain's extent [x min, y min, x max, y max] (m): operator targets outside it are
@@ -127,6 +134,8 @@ impl Deliberative {
             Port::of(topics::OPERATOR_REPLY),
             Port::of(topics::PLATFORM_HOLD),
             Port::of(topics::SCIENCE_SUMMARY),
+            Port::of(topics::PLATFORM_RIDE_ALONG),
+            Port::of(topics::VTT_TRACK),
         ]
     }
 
@@ -163,6 +172,8 @@ impl Deliberative {
             rover: RoverConfig::default(),
             navcam_width: 512,
             approaches: BTreeMap::new(),
+            tracks: BTreeMap::new(),
+            ride_along: None,
             last_navcam: None,
             area: None,
             direct: Vec::new(),
@@ -300,6 +311,7 @@ impl Deliberative {
         if self.state == MissionState::Running {
             self.pump_watches(bus)?;
             self.pump_approaches(bus)?;
+            self.pump_tracks(bus)?;
             self.advance(bus)?;
         }
         Ok(())
@@ -314,6 +326,7 @@ impl Deliberative {
             self.direct_frame(f);
             self.watch_frame(f);
             self.approach_frame(f);
+            self.track_frame(f);
             self.time_s = f.t;
             if let Some(p) = &f.power {
                 self.sleep.on_reading(p);

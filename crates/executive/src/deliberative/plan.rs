@@ -91,6 +91,7 @@ impl Deliberative {
                 bus.publish(topics::EXECUTIVE_MOTION, request)?;
             }
             TaskKind::ApproachTarget { .. } => return self.start_approach(bus, i, cmd),
+            TaskKind::TrackTarget { .. } => return self.start_track(i),
         }
         Ok(())
     }

@@ -43,6 +43,13 @@ pub enum TaskKind {
         /// Horizontal stand-off from the rover's origin to the target (m).
         standoff: f64,
     },
+    /// Track a designated target by visual target tracking while the tasks it runs in parallel
+    /// with drive ("track only", paper 003 section 3's sol-992 checkout): the Navcam pairs ride
+    /// along with the navigator's own sensing, and nothing it does changes the motion.
+    TrackTarget {
+        /// The target: a Navcam pixel or a site-frame point.
+        designation: Designation,
+    },
 }
 
 /// Something a task occupies while it runs; parallel tasks must not share one.
@@ -68,6 +75,7 @@ impl TaskKind {
             TaskKind::PlaceInstrument { .. } => "place_instrument",
             TaskKind::Scoop { .. } => "scoop",
             TaskKind::ApproachTarget { .. } => "approach_target",
+            TaskKind::TrackTarget { .. } => "track_target",
         }
     }
 
@@ -79,10 +87,11 @@ impl TaskKind {
             | TaskKind::ScienceImage { target }
             | TaskKind::PlaceInstrument { target }
             | TaskKind::Scoop { target } => Some(target),
-            TaskKind::ApproachTarget { designation: Designation::Site { x, y, .. }, .. } => {
+            TaskKind::ApproachTarget { designation: Designation::Site { x, y, .. }, .. }
+            | TaskKind::TrackTarget { designation: Designation::Site { x, y, .. } } => {
                 Some(Point2::new(x, y))
             }
-            TaskKind::Panorama | TaskKind::ApproachTarget { .. } => None,
+            TaskKind::Panorama | TaskKind::ApproachTarget { .. } | TaskKind::TrackTarget { .. } => None,
         }
     }
 
@@ -94,11 +103,15 @@ impl TaskKind {
             TaskKind::CloudWatch(_) | TaskKind::DustDevilWatch(_) => &[Resource::Wheels, Resource::Mast],
             TaskKind::Panorama | TaskKind::ScienceImage { .. } => &[Resource::Mast],
             TaskKind::PlaceInstrument { .. } | TaskKind::Scoop { .. } => &[Resource::Arm, Resource::Wheels],
+            // Its pictures ride along with the navigator's sensing: it occupies nothing.
+            TaskKind::TrackTarget { .. } => &[],
         }
     }
 
     pub(super) fn describe(&self) -> String {
-        if let TaskKind::ApproachTarget { designation: Designation::Pixel { row, col }, .. } = self {
+        if let TaskKind::ApproachTarget { designation: Designation::Pixel { row, col }, .. }
+        | TaskKind::TrackTarget { designation: Designation::Pixel { row, col } } = self
+        {
             return format!("{} (pixel row {row:.1}, col {col:.1})", self.name());
         }
         match self.target() {

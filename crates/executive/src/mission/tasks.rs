@@ -23,6 +23,9 @@ pub enum TaskKindName {
     DustDevilWatch,
     /// Drive to the target `x`, `y`, `z` by visual target tracking, stopping `standoff_m` short.
     ApproachTarget,
+    /// Track the target `x`, `y`, `z` by visual target tracking while the task before it drives
+    /// (`parallel = true`), without influencing the motion ("track only").
+    TrackTarget,
 }
 
 /// One `[[tasks]]` entry.
@@ -47,7 +50,7 @@ pub struct TaskSpecToml {
     pub tilt_deg: Option<f64>,
     /// Downlink budget of a watch (fraction of its raw volume; default 0.1).
     pub budget: Option<f64>,
-    /// Target height of an `approach_target` (m, site frame; default 0).
+    /// Target height of an `approach_target` or a `track_target` (m, site frame; default 0).
     pub z: Option<f64>,
     /// Stand-off of an `approach_target` (m; default 1).
     pub standoff_m: Option<f64>,
@@ -78,9 +81,17 @@ pub(super) fn check(mission: &Mission) -> Result<(), (String, String)> {
         if [t.x, t.y].iter().flatten().any(|v| !v.is_finite()) {
             return Err((field("x"), "target coordinates must be finite numbers".into()));
         }
-        if (t.z.is_some() || t.standoff_m.is_some()) && t.kind != TaskKindName::ApproachTarget {
+        let tracking = matches!(t.kind, TaskKindName::ApproachTarget | TaskKindName::TrackTarget);
+        if (t.z.is_some() && !tracking) || (t.standoff_m.is_some() && t.kind != TaskKindName::ApproachTarget)
+        {
             let name = if t.z.is_some() { "z" } else { "standoff_m" };
-            return Err((field(name), "only an approach_target takes it".into()));
+            return Err((field(name), "only an approach_target (and a track_target's z) takes it".into()));
+        }
+        if t.kind == TaskKindName::TrackTarget && !t.parallel {
+            return Err((
+                field("parallel"),
+                "a track_target tracks while the task before it drives: set parallel = true".into(),
+            ));
         }
         if t.z.is_some_and(|z| !z.is_finite()) {
             return Err((field("z"), "must be a finite number".into()));
@@ -179,6 +190,13 @@ impl Mission {
                             z: t.z.unwrap_or(0.0),
                         },
                         standoff: t.standoff_m.unwrap_or(crate::deliberative::TRACK_STANDOFF_M),
+                    },
+                    TaskKindName::TrackTarget => TaskKind::TrackTarget {
+                        designation: crate::deliberative::Designation::Site {
+                            x: target.x,
+                            y: target.y,
+                            z: t.z.unwrap_or(0.0),
+                        },
                     },
                 };
                 TaskSpec { kind, parallel: t.parallel }

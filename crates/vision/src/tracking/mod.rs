@@ -162,6 +162,10 @@ pub struct TrackParams {
     /// by this ratio since the last cut (1: every image). Each re-cut carries the match's
     /// subpixel error into the template, so fewer cuts drift less.
     pub recut_ratio: f64,
+    /// A match scoring below this re-cuts the template too (0: never): the target's look has
+    /// changed beyond what magnification and roll model, as when the viewing direction swings
+    /// while another plan drives past it (track-only mode).
+    pub recut_score: f32,
 }
 
 impl Default for TrackParams {
@@ -175,6 +179,7 @@ impl Default for TrackParams {
             jump_gate: 3.0,
             window: WindowParams::default(),
             recut_ratio: 1.0,
+            recut_score: 0.0,
         }
     }
 }
@@ -282,6 +287,12 @@ impl Tracker {
         &self.params
     }
 
+    /// The template the next match uses under `warp` (the reference resampled about the
+    /// target, [`TrackParams::template_half`]): what telemetry logs beside each match.
+    pub fn template(&self, warp: &TemplateWarp) -> Result<GreyF32, TrackError> {
+        resample_template(&self.reference, self.reference_pixel, self.params.template_half, warp)
+    }
+
     /// Finds the target in the next image; does not change the tracker (call
     /// [`Tracker::accept`] with the match and its point-stereo range).
     pub fn track(&self, step: &StepInput<'_>) -> TrackOutcome {
@@ -357,11 +368,26 @@ impl Tracker {
     /// follows the target's changing look; subpixel errors add up step by step) once the range
     /// has changed by `recut_ratio` since the last cut.
     pub fn accept(&mut self, image: &GreyF32, target: Target, roll_rad: f64) -> Result<(), TrackError> {
+        self.accept_scored(image, target, roll_rad, f32::INFINITY)
+    }
+
+    /// [`Tracker::accept`] for a match that scored `score`: below
+    /// [`TrackParams::recut_score`] the template is re-cut whatever the range change.
+    pub fn accept_scored(
+        &mut self,
+        image: &GreyF32,
+        target: Target,
+        roll_rad: f64,
+        score: f32,
+    ) -> Result<(), TrackError> {
         if !(target.range_m.is_finite() && target.range_m > 0.0) {
             return Err(TrackError::Parameter(format!("range {} m must be positive", target.range_m)));
         }
         let ratio = self.reference_range_m / target.range_m;
-        if ratio >= self.params.recut_ratio || ratio <= 1.0 / self.params.recut_ratio {
+        if ratio >= self.params.recut_ratio
+            || ratio <= 1.0 / self.params.recut_ratio
+            || score < self.params.recut_score
+        {
             let (reference, pixel) = crop_reference(image, target.pixel, self.params.template_half)?;
             self.reference = reference;
             self.reference_pixel = pixel;
