@@ -6,7 +6,7 @@
 //! Edge costs are those of [`crate::AStar`] on cell centres (mean of the two cells' costs times
 //! the step length, no corner cutting), so both give the same optimal costs.
 
-use crate::incremental::{Engine, Model};
+use crate::incremental::{Engine, Model, Values};
 use crate::lattice::Lattice;
 use crate::{CostGrid, GraphKind};
 use rovernav_core::Point2;
@@ -20,7 +20,7 @@ impl Model for CentreGraph {
     const GRAPH: GraphKind = GraphKind::CellCentres;
 
     #[inline]
-    fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64 {
+    fn rhs(lat: &Lattice, g: Values<'_>, s: usize) -> f64 {
         // `via` for the 8 directions written out with the cell's own cost loaded once and a
         // diagonal's side cells checked only when its far node has a value; the same edge
         // arithmetic, so the same value.
@@ -47,7 +47,7 @@ impl Model for CentreGraph {
     }
 
     #[inline]
-    fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64 {
+    fn via(lat: &Lattice, g: Values<'_>, s: usize, k: usize) -> f64 {
         let gn = g[lat.step(s, k)];
         if gn.is_infinite() { f64::INFINITY } else { lat.centre_edge(s, k) + gn }
     }
@@ -60,7 +60,7 @@ impl Model for CentreGraph {
     fn extract(
         lat: &Lattice,
         _grid: &CostGrid,
-        g: &[f64],
+        g: Values<'_>,
         start: usize,
         goal: usize,
     ) -> Option<(Vec<Point2>, f64)> {
@@ -70,7 +70,7 @@ impl Model for CentreGraph {
 
 /// Follows the values `g` downhill from `start` to `goal` on a graph: each step takes the
 /// neighbour minimising edge cost plus g. Returns the node points and the summed edge cost.
-pub(crate) fn descend(lat: &Lattice, g: &[f64], start: usize, goal: usize) -> Option<(Vec<Point2>, f64)> {
+pub(crate) fn descend(lat: &Lattice, g: Values<'_>, start: usize, goal: usize) -> Option<(Vec<Point2>, f64)> {
     let mut points = vec![lat.point(start)];
     let mut cost = 0.0;
     let mut s = start;

@@ -33,7 +33,7 @@
 //! least accurate. [`crate::Plan::cost`] is that polyline's cost on the grid (the figure the
 //! data README's Field D* references give), [`crate::Plan::value`] the interpolated g-value.
 
-use crate::incremental::{Engine, Model};
+use crate::incremental::{Engine, Model, Values};
 use crate::lattice::Lattice;
 use crate::{Cell, CostGrid, GraphKind};
 use rovernav_core::Point2;
@@ -107,7 +107,7 @@ pub(crate) fn triangle_cost_below(g1: f64, g2: f64, c: f64, b: f64, bound: f64) 
 
 impl Interpolated {
     #[inline]
-    fn triangle(lat: &Lattice, g: &[f64], s: usize, p: usize, bound: f64) -> f64 {
+    fn triangle(lat: &Lattice, g: Values<'_>, s: usize, p: usize, bound: f64) -> f64 {
         let (ak, dk, ci, bi) = TRIANGLES[p];
         let w = lat.w;
         let cells = [s, s - 1, s - w, s - w - 1];
@@ -125,17 +125,17 @@ impl Model for Interpolated {
     const GRAPH: GraphKind = GraphKind::CornerNodes;
 
     #[inline]
-    fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64 {
+    fn rhs(lat: &Lattice, g: Values<'_>, s: usize) -> f64 {
         (0..8).map(|p| Self::triangle(lat, g, s, p, f64::INFINITY)).fold(f64::INFINITY, f64::min)
     }
 
     #[inline]
-    fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64 {
+    fn via(lat: &Lattice, g: Values<'_>, s: usize, k: usize) -> f64 {
         Self::via_below(lat, g, s, k, f64::INFINITY)
     }
 
     #[inline]
-    fn via_below(lat: &Lattice, g: &[f64], s: usize, k: usize, bound: f64) -> f64 {
+    fn via_below(lat: &Lattice, g: Values<'_>, s: usize, k: usize, bound: f64) -> f64 {
         Self::triangle(lat, g, s, k, bound).min(Self::triangle(lat, g, s, (k + 7) % 8, bound))
     }
 
@@ -149,7 +149,7 @@ impl Model for Interpolated {
     fn extract(
         lat: &Lattice,
         grid: &CostGrid,
-        g: &[f64],
+        g: Values<'_>,
         start: usize,
         goal: usize,
     ) -> Option<(Vec<Point2>, f64)> {
@@ -161,7 +161,7 @@ impl Model for Interpolated {
 const SNAP: f64 = 1e-9;
 
 /// g of corner node (i, j) given as possibly out-of-range integers.
-fn node_g(lat: &Lattice, g: &[f64], i: i64, j: i64) -> f64 {
+fn node_g(lat: &Lattice, g: Values<'_>, i: i64, j: i64) -> f64 {
     if i < 0 || j < 0 || i > lat.rows as i64 || j > lat.cols as i64 {
         f64::INFINITY
     } else {
@@ -219,7 +219,7 @@ fn best_on_edge(p: Point2, pa: Point2, pb: Point2, ga: f64, gb: f64, c: f64) -> 
 fn interpolated_path(
     lat: &Lattice,
     grid: &CostGrid,
-    g: &[f64],
+    g: Values<'_>,
     start: usize,
     goal: usize,
 ) -> Option<(Vec<Point2>, f64)> {

@@ -16,15 +16,15 @@ pub(crate) trait Model {
     /// The graph searched.
     const GRAPH: GraphKind;
     /// The one-step lookahead value of node `s` (not the goal) from all its neighbours.
-    fn rhs(lat: &Lattice, g: &[f64], s: usize) -> f64;
+    fn rhs(lat: &Lattice, g: Values<'_>, s: usize) -> f64;
     /// The value of `s` through the neighbour in direction `k` only (after that neighbour's g
     /// decreased, `rhs(s) = min(rhs(s), via)` keeps `rhs` exact).
-    fn via(lat: &Lattice, g: &[f64], s: usize, k: usize) -> f64;
+    fn via(lat: &Lattice, g: Values<'_>, s: usize, k: usize) -> f64;
     /// `via`, or when that is not below `bound`, possibly any value not below `bound` either:
     /// what an expansion needs to decide whether `s`'s `rhs` (the bound) improves, and by how
     /// much when it does. Lets a model skip work that cannot change the outcome.
     #[inline]
-    fn via_below(lat: &Lattice, g: &[f64], s: usize, k: usize, bound: f64) -> f64 {
+    fn via_below(lat: &Lattice, g: Values<'_>, s: usize, k: usize, bound: f64) -> f64 {
         let _ = bound;
         Self::via(lat, g, s, k)
     }
@@ -41,10 +41,24 @@ pub(crate) trait Model {
     fn extract(
         lat: &Lattice,
         grid: &CostGrid,
-        g: &[f64],
+        g: Values<'_>,
         start: usize,
         goal: usize,
     ) -> Option<(Vec<Point2>, f64)>;
+}
+
+/// Read-only view of the engine's g-values, indexed by node (`g[n]`). The engine keeps each
+/// node's g and rhs side by side (one cache line serves both, as most steps read the two);
+/// this view reads the g half.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Values<'a>(&'a [[f64; 2]]);
+
+impl std::ops::Index<usize> for Values<'_> {
+    type Output = f64;
+    #[inline(always)]
+    fn index(&self, n: usize) -> &f64 {
+        &self.0[n][0]
+    }
 }
 
 /// Relative size of value changes treated as rounding noise. Field D*'s interpolated values
@@ -73,8 +87,8 @@ fn key_less(a: Key, b: Key) -> bool {
 pub(crate) struct Engine<M: Model> {
     grid: Option<CostGrid>,
     lat: Option<Lattice>,
-    g: Vec<f64>,
-    rhs: Vec<f64>,
+    /// `[g, rhs]` per node.
+    v: Vec<[f64; 2]>,
     heap: IndexedHeap,
     touched: Vec<bool>,
     touched_list: Vec<u32>,
@@ -95,8 +109,7 @@ impl<M: Model> Default for Engine<M> {
         Self {
             grid: None,
             lat: None,
-            g: Vec::new(),
-            rhs: Vec::new(),
+            v: Vec::new(),
             heap: IndexedHeap::new(0),
             touched: Vec::new(),
             touched_list: Vec::new(),
@@ -118,8 +131,7 @@ impl<M: Model> Engine<M> {
     pub fn set_grid(&mut self, grid: CostGrid) {
         let lat = Lattice::new(&grid, M::GRAPH);
         let n = lat.len();
-        self.g = vec![f64::INFINITY; n];
-        self.rhs = vec![f64::INFINITY; n];
+        self.v = vec![[f64::INFINITY; 2]; n];
         self.heap = IndexedHeap::new(n);
         self.touched = vec![false; n];
         self.touched_list.clear();
@@ -202,7 +214,7 @@ impl<M: Model> Engine<M> {
             self.mark[n] = false;
             if n != self.goal {
                 let lat = self.lat.as_ref().expect("lattice");
-                let v = M::rhs(lat, &self.g, n);
+                let v = M::rhs(lat, Values(&self.v), n);
                 self.set_rhs(n, v);
                 self.update_vertex(n);
             }
@@ -213,8 +225,7 @@ impl<M: Model> Engine<M> {
     fn reset_search(&mut self, start: usize, goal: usize) {
         for &n in &self.touched_list {
             let n = n as usize;
-            self.g[n] = f64::INFINITY;
-            self.rhs[n] = f64::INFINITY;
+            self.v[n] = [f64::INFINITY; 2];
             self.touched[n] = false;
         }
         self.touched_list.clear();
@@ -241,20 +252,20 @@ impl<M: Model> Engine<M> {
     #[inline]
     fn set_rhs(&mut self, n: usize, v: f64) {
         self.touch(n);
-        self.rhs[n] = v;
+        self.v[n][1] = v;
     }
 
     /// g equals rhs up to rounding noise (both infinite counts as equal).
     #[inline]
     fn consistent(&self, n: usize) -> bool {
-        let (g, rhs) = (self.g[n], self.rhs[n]);
+        let [g, rhs] = self.v[n];
         g == rhs || (g - rhs).abs() <= REL_TOL * (1.0 + g.abs().min(rhs.abs()))
     }
 
     #[inline]
     fn key(&self, n: usize) -> Key {
         let lat = self.lat.as_ref().expect("lattice");
-        Self::key_with(lat, self.start_rc, self.km, self.g[n].min(self.rhs[n]), n)
+        Self::key_with(lat, self.start_rc, self.km, self.v[n][0].min(self.v[n][1]), n)
     }
 
     /// The key `[m + h(start, n) + km, m]` of node `n` with `m = min(g, rhs)`, the heuristic
@@ -280,7 +291,7 @@ impl<M: Model> Engine<M> {
         loop {
             let top = self.heap.top_key();
             // h(start, start) = h_rc(0, 0): no division.
-            let m = self.g[self.start].min(self.rhs[self.start]);
+            let m = self.v[self.start][0].min(self.v[self.start][1]);
             let start_key = [m + M::h_rc(0, 0) + self.km, m];
             let start_consistent = self.consistent(self.start);
             let done = !key_less(top, start_key) && start_consistent;
@@ -297,16 +308,16 @@ impl<M: Model> Engine<M> {
             }
             self.expansions += 1;
             let lat = self.lat.take().expect("lattice");
-            if self.g[u] > self.rhs[u] {
+            if self.v[u][0] > self.v[u][1] {
                 self.touch(u);
-                self.g[u] = self.rhs[u];
+                self.v[u][0] = self.v[u][1];
                 for k in 0..8 {
                     let s = lat.step(u, k);
                     if !lat.valid[s] || s == self.goal {
                         continue;
                     }
-                    let via = M::via_below(&lat, &self.g, s, (k + 4) % 8, self.rhs[s]);
-                    if improves(via, self.rhs[s]) {
+                    let via = M::via_below(&lat, Values(&self.v), s, (k + 4) % 8, self.v[s][1]);
+                    if improves(via, self.v[s][1]) {
                         self.set_rhs(s, via);
                         self.update_vertex_with(&lat, s);
                     }
@@ -318,21 +329,21 @@ impl<M: Model> Engine<M> {
                 for (k, dep) in depends.iter_mut().enumerate() {
                     let s = lat.step(u, k);
                     if lat.valid[s] && s != self.goal {
-                        *dep = !improves(self.rhs[s], M::via(&lat, &self.g, s, (k + 4) % 8));
+                        *dep = !improves(self.v[s][1], M::via(&lat, Values(&self.v), s, (k + 4) % 8));
                     }
                 }
                 self.touch(u);
-                self.g[u] = f64::INFINITY;
+                self.v[u][0] = f64::INFINITY;
                 for (k, &dep) in depends.iter().enumerate() {
                     if dep {
                         let s = lat.step(u, k);
-                        let v = M::rhs(&lat, &self.g, s);
+                        let v = M::rhs(&lat, Values(&self.v), s);
                         self.set_rhs(s, v);
                         self.update_vertex_with(&lat, s);
                     }
                 }
                 if u != self.goal {
-                    let v = M::rhs(&lat, &self.g, u);
+                    let v = M::rhs(&lat, Values(&self.v), u);
                     self.set_rhs(u, v);
                 }
                 self.update_vertex_with(&lat, u);
@@ -344,7 +355,7 @@ impl<M: Model> Engine<M> {
     #[inline]
     fn update_vertex_with(&mut self, lat: &Lattice, n: usize) {
         if !self.consistent(n) {
-            let k = Self::key_with(lat, self.start_rc, self.km, self.g[n].min(self.rhs[n]), n);
+            let k = Self::key_with(lat, self.start_rc, self.km, self.v[n][0].min(self.v[n][1]), n);
             self.heap.push_or_update(n, k);
         } else {
             self.heap.remove(n);
@@ -363,11 +374,11 @@ impl<M: Model> Engine<M> {
         let (sr, sc) = lat.coords(self.start);
         let (gr, gc) = lat.coords(self.goal);
         let no_path = PlanError::NoPath { start: Cell::new(sr, sc), goal: Cell::new(gr, gc) };
-        let value = self.g[self.start];
+        let value = self.v[self.start][0];
         if !value.is_finite() {
             return Err(no_path);
         }
-        let (points, cost) = M::extract(lat, grid, &self.g, self.start, self.goal).ok_or(no_path)?;
+        let (points, cost) = M::extract(lat, grid, Values(&self.v), self.start, self.goal).ok_or(no_path)?;
         Ok(Plan { cost, value, points, expansions: self.expansions })
     }
 }
