@@ -66,7 +66,7 @@ pub fn graph_search(grid: &CostGrid, reps: usize) -> anyhow::Result<Vec<Row>> {
                 what,
                 theirs_name,
                 times,
-                "binary-heap pops and random access to 1M-node arrays (memory latency)",
+                "binary-heap pops (one dependent key load and comparison per level) and random access to 1M-node arrays (memory latency)",
             )
             .costs(plan.cost, base)
             .details(json!({
@@ -115,7 +115,7 @@ pub fn field_dstar(grid: &CostGrid, reps: usize) -> anyhow::Result<Row> {
         "Field D* from scratch (interpolated, corner nodes)",
         "A* on the corner-node graph (rovernav astar-corners)",
         times,
-        "16 interpolated triangle evaluations per expansion (2 square roots each) and the D* Lite key/heap work",
+        "the interpolated triangles' square roots and divisions (up to 16 triangles per expansion; a cut across a cell is skipped when a lower bound cannot win) and the D* Lite key/heap work",
     )
     .costs(plan.cost, corner.cost)
     .details(json!({
