@@ -114,6 +114,7 @@ fn track_only_leaves_the_drive_pose_for_pose_and_tracks_the_true_rock() {
     // The site frame is the localiser's: it starts at z = 0 where the rover stands, so the
     // operator gives heights above the rover's start.
     let site = aim - nalgebra::Vector3::new(0.0, 0.0, alone.trace.truth[0].z);
+    eprintln!("goal {goal:?}, designated site point {site}");
     let mut log = VttLog::default();
     let tracked = Run::mission(&mission(goal, Some(site)), "track only")
         .expect("builds")

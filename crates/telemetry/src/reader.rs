@@ -58,6 +58,8 @@ pub struct LoggedRun {
     pub placements: Vec<rovernav_executive::arm_server::PlacementMsg>,
     /// `/bus/science/summary`: every science watch's summary, in the order the watches ended.
     pub science: Vec<rovernav_executive::deliberative::WatchSummary>,
+    /// `/bus/vtt/track`: every image visual target tracking saw, in order.
+    pub vtt: Vec<rovernav_executive::deliberative::VttTrackMsg>,
     /// Messages per topic (unknown topics included: they are counted and skipped).
     pub topic_counts: BTreeMap<String, u64>,
     /// How far reading got.
@@ -140,6 +142,7 @@ pub fn parse_log(bytes: &[u8], path: &Path) -> Result<LoggedRun, TelemetryError>
             topics::REPORT => run.report = Some(decode(data).map_err(decode_err)?),
             topics::ARM_PLACEMENT => run.placements.push(decode(data).map_err(decode_err)?),
             topics::SCIENCE_SUMMARY => run.science.push(decode(data).map_err(decode_err)?),
+            topics::VTT_TRACK => run.vtt.push(decode(data).map_err(decode_err)?),
             _ => {}
         }
     }

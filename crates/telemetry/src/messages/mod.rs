@@ -45,6 +45,9 @@ pub mod topics {
     pub const ARM_PLACEMENT: &str = "/bus/arm/placement";
     /// Each science watch's compact summary, as the deliberative layer published it on the bus.
     pub const SCIENCE_SUMMARY: &str = "/bus/science/summary";
+    /// Each image visual target tracking saw (template, match, score, target estimate), as
+    /// the deliberative layer published it on the bus.
+    pub const VTT_TRACK: &str = "/bus/vtt/track";
     /// The power system's reading after each command (battery, panel, loads).
     pub const POWER: &str = "/power";
     /// Every topic a run logs, in the order they are first written.
