@@ -15,6 +15,11 @@
 //! plan redone; and the rover drives only over ground it has seen under its whole footprint and
 //! stops only where it can turn. A turn that becomes unsafe after new sensing is refused at
 //! execution and the rover retraces its latest motions to room to turn.
+//!
+//! A goal counts as reached anywhere within its tolerance, so when the grown hazards wall off
+//! the goal cell itself (a waypoint among rocks) the plan goes to the reachable cell nearest the
+//! goal inside 70 % of the tolerance (margin for the estimate's error) rather than declaring the
+//! goal unreachable.
 
 use crate::params::{Field, Param, Unit, map_params, turn_threshold_param};
 use crate::registry::{NavigatorEntry, Variant, param_info};
@@ -23,7 +28,9 @@ use rovernav_core::{
     DriveGuard, GridGeometry, NavCommand, NavInput, Navigator, NavigatorStats, Outcome, Overlay, Point2,
     Pose2, RoverConfig, SenseRequest, angle_diff,
 };
-use rovernav_planning::{Cell, GlobalPlanner, PlanError, SegmentDriverConfig, planner_by_name, segment_path};
+use rovernav_planning::{
+    Cell, CostGrid, GlobalPlanner, PlanError, SegmentDriverConfig, planner_by_name, segment_path,
+};
 use std::collections::VecDeque;
 
 /// Tunable parameters of the grid navigator.
@@ -113,6 +120,8 @@ pub struct GridNavigator {
     squeezed_at: Option<Point2>,
     /// The latest motions, newest last, to retrace out of a spot too tight to turn in.
     trail: Vec<Motion>,
+    /// The current goal's tolerance (m): a plan may end anywhere this close to the goal.
+    goal_tolerance: f64,
 }
 
 /// Replans allowed per planning cycle to route around turns the body cannot make.
@@ -183,6 +192,7 @@ impl GridNavigator {
             full_scan_pending: false,
             squeezed_at: None,
             trail: Vec::new(),
+            goal_tolerance: 0.0,
         }
     }
 
@@ -247,7 +257,25 @@ impl GridNavigator {
         };
         self.planner.set_grid(grid);
         self.stats.plans += 1;
-        let plan = match self.planner.plan(start, goal_cell) {
+        // The goal counts as reached anywhere within its tolerance: when a hazard's margin walls
+        // off the goal cell itself, plan to the reachable cell nearest it inside the tolerance.
+        let mut target = goal;
+        let planned = match self.planner.plan(start, goal_cell) {
+            Err(PlanError::NoPath { .. }) => {
+                let radius = GOAL_REGION_FRACTION * self.goal_tolerance;
+                let grid = self.planner.grid().expect("grid set above");
+                match goal_region(grid, start, goal, radius).filter(|&c| c != goal_cell) {
+                    Some(cell) => {
+                        let (x, y) = g.center(cell.col, cell.row);
+                        target = Point2::new(x, y);
+                        self.planner.plan(start, cell)
+                    }
+                    None => Err(PlanError::NoPath { start, goal: goal_cell }),
+                }
+            }
+            other => other,
+        };
+        let plan = match planned {
             Ok(plan) => plan,
             Err(PlanError::NoPath { .. }) => {
                 if !closed.is_empty() {
@@ -287,7 +315,7 @@ impl GridNavigator {
             *first = from;
         }
         if let Some(last) = world.last_mut() {
-            *last = goal;
+            *last = target;
         }
         self.plan = world.clone();
 
@@ -325,8 +353,11 @@ impl GridNavigator {
             at = next;
         }
         // Look where the plan leaves sensed terrain (or toward the goal).
-        let look_at =
-            if segments.complete { goal } else { step_path[segments.sensed_points.min(step_path.len() - 1)] };
+        let look_at = if segments.complete {
+            target
+        } else {
+            step_path[segments.sensed_points.min(step_path.len() - 1)]
+        };
         self.look_bearing = Some(look_at.sub(from).angle());
         let length: f64 = std::iter::once(from)
             .chain(segments.waypoints.iter().copied())
@@ -349,6 +380,46 @@ impl GridNavigator {
         self.stats.sensing_actions += requests.len() as u64;
         NavCommand::Sense(requests)
     }
+}
+
+/// Fraction of the goal's tolerance within which a plan to the goal region may end: margin for
+/// the estimate's error and the segment driver's cut.
+const GOAL_REGION_FRACTION: f64 = 0.7;
+
+/// The cell reachable from `start` through passable cells (8-connected, no corner cutting, as
+/// the planners move) whose centre lies nearest `goal` and within `radius` of it; `None` when
+/// there is none. A breadth-first search over the start's connected region.
+fn goal_region(grid: &CostGrid, start: Cell, goal: Point2, radius: f64) -> Option<Cell> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    if radius <= 0.0 || !grid.contains(start) {
+        return None;
+    }
+    let g = grid.geometry();
+    let passable = |r: usize, c: usize| grid.cost(Cell::new(r, c)).is_finite();
+    let mut seen = vec![false; rows * cols];
+    let mut queue = VecDeque::from([start]);
+    seen[start.row * cols + start.col] = true;
+    let mut best: Option<(f64, Cell)> = None;
+    while let Some(cell) = queue.pop_front() {
+        let (x, y) = g.center(cell.col, cell.row);
+        let d = goal.dist(Point2::new(x, y));
+        if d <= radius && best.is_none_or(|(b, _)| d < b) {
+            best = Some((d, cell));
+        }
+        for (dr, dc) in [(-1i64, -1i64), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)] {
+            let (r, c) = (cell.row as i64 + dr, cell.col as i64 + dc);
+            if r < 0 || c < 0 || r >= rows as i64 || c >= cols as i64 {
+                continue;
+            }
+            let (r, c) = (r as usize, c as usize);
+            let diagonal_clear = dr == 0 || dc == 0 || (passable(cell.row, c) && passable(r, cell.col));
+            if !seen[r * cols + c] && passable(r, c) && diagonal_clear {
+                seen[r * cols + c] = true;
+                queue.push_back(Cell::new(r, c));
+            }
+        }
+    }
+    best.map(|(_, cell)| cell)
 }
 
 /// The waypoints cut so the rover stops where it can turn in place freely: the last point of
@@ -412,6 +483,7 @@ impl Navigator for GridNavigator {
         if let Some((outcome, why)) = self.finish.clone() {
             return NavCommand::Finish(outcome, why);
         }
+        self.goal_tolerance = input.goal.tolerance;
         if here.dist(goal) <= input.goal.tolerance {
             return NavCommand::Finish(
                 Outcome::Reached,
@@ -609,6 +681,51 @@ mod tests {
         assert!((cut[0].x - 0.55).abs() < 1e-9 && cut[0].y.abs() < 1e-9, "{cut:?}");
         // Nowhere to turn: the plan is kept as it was.
         assert_eq!(stop_where_turnable(Point2::new(0.0, 0.0), &wps, |_| false), wps.to_vec());
+    }
+
+    /// The goal region's cell against a second implementation: A* itself, asked for a path to
+    /// every cell within the radius, on 300 random grids a third blocked.
+    #[test]
+    fn the_goal_region_is_the_nearest_cell_a_star_reaches() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let (rows, cols, res) = (16usize, 16usize, 0.1);
+        let mut found = 0;
+        for _ in 0..300 {
+            let costs: Vec<f32> =
+                (0..rows * cols).map(|_| if next() % 3 == 0 { f32::INFINITY } else { 1.0 }).collect();
+            let mut grid = CostGrid::from_costs(rows, cols, costs).unwrap();
+            grid.set_geometry(GridGeometry { cols, rows, resolution: res, origin_x: 0.0, origin_y: 0.0 });
+            let start = Cell::new(next() as usize % rows, next() as usize % cols);
+            let _ = grid.set_cost(start, 1.0);
+            let goal = Point2::new((next() % 1600) as f64 / 1000.0, (next() % 1600) as f64 / 1000.0);
+            let radius = 0.25;
+            let g = grid.geometry();
+            let mut astar = planner_by_name("astar").unwrap();
+            astar.set_grid(grid.clone());
+            let centre = |c: Cell| {
+                let (x, y) = g.center(c.col, c.row);
+                goal.dist(Point2::new(x, y))
+            };
+            let expected = (0..rows)
+                .flat_map(|r| (0..cols).map(move |c| Cell::new(r, c)))
+                .filter(|&c| centre(c) <= radius && astar.plan(start, c).is_ok())
+                .map(centre)
+                .fold(f64::INFINITY, f64::min);
+            match goal_region(&grid, start, goal, radius) {
+                Some(cell) => {
+                    found += 1;
+                    assert!((centre(cell) - expected).abs() < 1e-12, "{cell:?} vs {expected}");
+                }
+                None => assert!(expected.is_infinite(), "A* reaches a cell {expected} m from the goal"),
+            }
+        }
+        assert!(found > 50 && found < 300, "both cases drawn: {found} of 300 reachable");
     }
 
     #[test]
