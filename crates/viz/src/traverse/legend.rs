@@ -1,10 +1,11 @@
 //! What a traverse picture draws, in which colour, and the legend naming each kind that is
 //! present in a given picture (and only those).
 
-use super::TraverseScene;
 use super::frame::Frame;
+use super::{TraverseScene, map_px_per_m};
 use plotters::style::RGBColor;
 use rovernav_core::{Overlay, OverlayKind};
+use rovernav_terrain::Rock;
 
 /// The driven (true) path.
 pub const DRIVEN: RGBColor = RGBColor(255, 255, 255);
@@ -93,6 +94,36 @@ pub struct Entry {
     pub label: String,
 }
 
+/// How the map draws a rock: a filled disc for one taller than the belly clearance (at least
+/// 2 px across, so none is lost at any scale), an outline for a smaller one as wide as 1.5 px
+/// or more, nothing for a smaller one under that.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RockMark {
+    /// Taller than the belly clearance.
+    Hazard,
+    /// Smaller, wide enough to draw.
+    Small,
+}
+
+/// The mark of `rock` on a map of `px_per_m` framed by `frame` (`None`: not drawn), the one rule
+/// the map and the legend share.
+pub fn rock_mark(rock: &Rock, clearance: f64, frame: &Frame, px_per_m: f64) -> Option<RockMark> {
+    let reach = rock.diameter;
+    let overlaps = rock.x + reach >= frame.x0
+        && rock.x - reach <= frame.x1
+        && rock.y + reach >= frame.y0
+        && rock.y - reach <= frame.y1;
+    if !overlaps {
+        None
+    } else if rock.height > clearance {
+        Some(RockMark::Hazard)
+    } else if 0.5 * rock.diameter * px_per_m >= 1.5 {
+        Some(RockMark::Small)
+    } else {
+        None
+    }
+}
+
 fn entry(mark: Mark, label: &str) -> Entry {
     Entry { mark, label: label.to_string() }
 }
@@ -104,14 +135,13 @@ pub fn entries(scene: &TraverseScene<'_>, frame: &Frame) -> Vec<Entry> {
     if trace.sensed.as_ref().is_some_and(|s| s.data.iter().any(|&v| v)) {
         out.push(entry(Mark::Patch(RGBColor(60, 200, 255)), "ground seen by range sensors"));
     }
-    let in_frame = |x: f64, y: f64| x >= frame.x0 && x <= frame.x1 && y >= frame.y0 && y <= frame.y1;
-    let rocks = scene.terrain.rocks.iter().filter(|r| in_frame(r.x, r.y));
+    let px_per_m = map_px_per_m(frame);
     let (mut tall, mut small) = (false, false);
-    for r in rocks {
-        if r.height > scene.rover.clearance {
-            tall = true;
-        } else {
-            small = true;
+    for r in &scene.terrain.rocks {
+        match rock_mark(r, scene.rover.clearance, frame, px_per_m) {
+            Some(RockMark::Hazard) => tall = true,
+            Some(RockMark::Small) => small = true,
+            None => {}
         }
     }
     if tall {

@@ -67,19 +67,20 @@ pub(super) fn draw<DB: DrawingBackend>(
     }
 
     let px_per_m = mw as f64 / frame.width();
-    let inside = |x: f64, y: f64, r: f64| {
-        x + r >= frame.x0 && x - r <= frame.x1 && y + r >= frame.y0 && y - r <= frame.y1
-    };
-    for rock in scene.terrain.rocks.iter().filter(|r| inside(r.x, r.y, r.diameter)) {
+    for rock in &scene.terrain.rocks {
         let r = 0.5 * rock.diameter * px_per_m;
-        if rock.height > scene.rover.clearance {
-            chart.draw_series(std::iter::once(Circle::new(
-                (rock.x, rock.y),
-                r.max(2.0),
-                HAZARD_ROCK.filled(),
-            )))?;
-        } else if r >= 1.5 {
-            chart.draw_series(std::iter::once(Circle::new((rock.x, rock.y), r, ROCK.mix(0.6))))?;
+        match rock_mark(rock, scene.rover.clearance, &frame, px_per_m) {
+            Some(RockMark::Hazard) => {
+                chart.draw_series(std::iter::once(Circle::new(
+                    (rock.x, rock.y),
+                    r.max(2.0),
+                    HAZARD_ROCK.filled(),
+                )))?;
+            }
+            Some(RockMark::Small) => {
+                chart.draw_series(std::iter::once(Circle::new((rock.x, rock.y), r, ROCK.mix(0.6))))?;
+            }
+            None => {}
         }
     }
     for zone in &scene.goal.keep_out {

@@ -107,6 +107,11 @@ impl TraverseScene<'_> {
     }
 }
 
+/// Map pixels per metre of a picture framed by `frame` (the map's width over the frame's).
+fn map_px_per_m(frame: &Frame) -> f64 {
+    frame.pixels(MAP_PX).0 as f64 / frame.width()
+}
+
 /// Renders the picture into RGB pixels.
 pub fn render(scene: &TraverseScene<'_>) -> std::io::Result<Rendered> {
     font::ensure();

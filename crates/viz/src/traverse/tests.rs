@@ -160,3 +160,31 @@ fn the_frame_fits_the_route_not_the_whole_world() {
     assert!(frame.width() < 30.0 && frame.height() < 30.0, "{frame:?}");
     assert!(frame.wants_inset(&frame::Frame::of_grid(&g)));
 }
+
+/// The legend lists a smaller rock exactly when the map draws one: at this 20 m frame (720 px
+/// across a 20-odd metre frame, about 35 px per metre) a 2 cm pebble is under 1.5 px and left
+/// out of both, a 0.3 m stone is drawn and listed.
+#[test]
+fn the_legend_lists_a_smaller_rock_only_when_the_map_draws_it() {
+    let small = |diameter: f64| {
+        let mut f = fixture(vec![]);
+        f.terrain.rocks.push(Rock { x: 6.0, y: 12.0, diameter, height: 0.05 });
+        f
+    };
+    let has_small =
+        |f: &Fixture| render(&scene(f)).unwrap().legend.iter().any(|l| l.contains("smaller rock"));
+    let pebble = small(0.02);
+    let stone = small(0.3);
+    let px_per_m = super::map_px_per_m(&scene(&stone).frame());
+    assert!(0.5 * 0.02 * px_per_m < 1.5 && 0.5 * 0.3 * px_per_m >= 1.5, "{px_per_m} px/m");
+    assert!(!has_small(&pebble), "a pebble the map leaves out is not listed");
+    assert!(has_small(&stone), "a stone the map outlines is listed");
+    // The stone's outline is in the picture, one radius east of its centre.
+    let r = render(&scene(&stone)).unwrap();
+    let (cx, cy) = r.map.pixel_of(Point2::new(6.0, 12.0));
+    let radius = (0.15 * px_per_m).round() as i32;
+    let near_outline = (-1..=1).any(|d| {
+        rgb_at(&r, (cx + radius + d, cy)) != rgb_at(&render(&scene(&pebble)).unwrap(), (cx + radius + d, cy))
+    });
+    assert!(near_outline, "the outline changes the pixels at its radius");
+}
