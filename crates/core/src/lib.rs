@@ -23,7 +23,7 @@ pub use nav::{
 };
 pub use rover::RoverConfig;
 pub use sensors::{
-    CameraImage, CameraKind, ImuSample, OdometrySample, PointCloud, PowerReading, ProximityReading,
+    CameraImage, CameraKind, ImuSample, LanderSighting, OdometrySample, PointCloud, PowerReading, ProximityReading,
     RangeNoise, SensorFrame, SensorNoise, Wedge,
 };
 

@@ -179,6 +179,24 @@ pub struct SensorFrame {
     /// The power system's reading at the end of the command (absent from platforms without one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub power: Option<PowerReading>,
+    /// A lander's stereo sighting of the rover, when a lander watched this command (paper 002
+    /// section 2: the rover turned in place in its view).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lander: Option<Box<LanderSighting>>,
+}
+
+/// A lander's sighting of the rover (paper 002 section 2), in the world frame: the lander knows
+/// where it stands, so its triangulated point is an absolute measurement.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct LanderSighting {
+    /// The lander's (left) camera centre (m).
+    pub camera: [f64; 3],
+    /// The triangulated point of the rover's visible surface (m).
+    pub point: [f64; 3],
+    /// Standard deviation of the range along the line of sight (m).
+    pub range_sigma_m: f64,
+    /// Standard deviation of the image position, as an angle (rad).
+    pub angle_sigma_rad: f64,
 }
 
 /// The power system's telemetry (SR2's current and voltage sensors on the solar panel and the

@@ -427,6 +427,12 @@ mod tests {
                 tilt: -0.5,
             }],
             power: Some(rovernav_core::PowerReading { t: 12.3, state_of_charge: 0.5, ..Default::default() }),
+            lander: Some(Box::new(rovernav_core::LanderSighting {
+                camera: [1.0, -2.0, 1.8],
+                point: [7.25, 0.5, 0.3],
+                range_sigma_m: 0.04,
+                angle_sigma_rad: 0.011,
+            })),
         }
     }
 

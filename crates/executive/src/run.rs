@@ -321,7 +321,10 @@ impl<'a> Run<'a> {
     /// A mission file's run: its world, settings, tasks and scheduled faults. `origin` names the
     /// mission source in error messages.
     pub fn mission(mission: &Mission, origin: &str) -> Result<Self, RunError> {
-        let world = build_world(mission, origin)?;
+        let mut world = build_world(mission, origin)?;
+        if let Some(lander) = &mission.lander {
+            world.sensor_model.lander = Some(lander.station(world.start.x, world.start.y));
+        }
         let options = RunOptions::of(mission, &world);
         Ok(Self::new(world, RunSettings::of(mission)).options(options).origin(origin))
     }

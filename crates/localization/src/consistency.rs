@@ -28,6 +28,27 @@ pub fn squared_mahalanobis_2d(ex: f64, ey: f64, s: &[[f64; 2]; 2]) -> Option<f64
     (det > 0.0).then(|| (s[1][1] * ex * ex - (s[0][1] + s[1][0]) * ex * ey + s[0][0] * ey * ey) / det)
 }
 
+/// The covariance intersection weight of two 2x2 position covariances `p` (the filter's) and
+/// `r` (a fix's) whose errors may be correlated in any way (Julier and Uhlmann, "A
+/// non-divergent estimation algorithm in the presence of unknown correlations", 1997): the
+/// omega in [0.01, 0.99] that minimises the determinant of (omega p^-1 + (1 - omega) r^-1)^-1.
+/// Fusing with `p / omega` and `r / (1 - omega)` as if independent gives that intersection.
+/// `None` when either matrix is singular.
+pub fn covariance_intersection_weight(p: &[[f64; 2]; 2], r: &[[f64; 2]; 2]) -> Option<f64> {
+    let inverse = |m: &[[f64; 2]; 2]| {
+        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        (det > 0.0 && det.is_finite())
+            .then(|| [[m[1][1] / det, -m[0][1] / det], [-m[1][0] / det, m[0][0] / det]])
+    };
+    let (a, b) = (inverse(p)?, inverse(r)?);
+    // det(omega a + (1 - omega) b) is a quadratic in omega: the best of a fine grid.
+    let information = |w: f64| {
+        let m = |i: usize, j: usize| w * a[i][j] + (1.0 - w) * b[i][j];
+        m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0)
+    };
+    (1..=99).map(|k| f64::from(k) / 100.0).max_by(|x, y| information(*x).total_cmp(&information(*y)))
+}
+
 /// The standard normal quantile at `p` in (0, 1) (Abramowitz and Stegun 26.2.23).
 pub fn normal_quantile(p: f64) -> f64 {
     let p = p.clamp(1e-300, 1.0 - 1e-16);
@@ -79,6 +100,21 @@ mod tests {
         assert!((normal_quantile(0.5)).abs() < 1e-3);
         let (lo, hi) = mean_nees_bounds(20, 2, 0.95);
         assert!((lo - 24.433 / 20.0).abs() < 0.01 && (hi - 59.342 / 20.0).abs() < 0.01, "{lo} {hi}");
+    }
+
+    #[test]
+    fn the_intersection_weight_maximises_the_fused_information() {
+        // Diagonal p = diag(1, 9), r = diag(4, 1): det((w/p1 + (1-w)/r1)(w/p2 + (1-w)/r2)) is a
+        // downward parabola in w with its vertex at -(c1 d2 + c2 d1) / (2 d1 d2), c = 1/r,
+        // d = 1/p - 1/r: 0.3958.
+        let w = covariance_intersection_weight(&[[1.0, 0.0], [0.0, 9.0]], &[[4.0, 0.0], [0.0, 1.0]]).unwrap();
+        assert!((w - 0.3958).abs() < 0.006, "{w}");
+        // Mirror images weigh half; a fix worse in every direction weighs (almost) nothing.
+        let w = covariance_intersection_weight(&[[1.0, 0.0], [0.0, 4.0]], &[[4.0, 0.0], [0.0, 1.0]]).unwrap();
+        assert!((w - 0.5).abs() < 1e-9, "{w}");
+        let tight = [[0.01, 0.0], [0.0, 0.01]];
+        assert_eq!(covariance_intersection_weight(&tight, &[[1.0, 0.0], [0.0, 1.0]]), Some(0.99));
+        assert!(covariance_intersection_weight(&tight, &[[0.0; 2]; 2]).is_none());
     }
 
     #[test]

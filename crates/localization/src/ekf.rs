@@ -213,6 +213,19 @@ impl Ekf {
         self.cov[(2, 2)] += heading_variance.max(0.0);
     }
 
+    /// Multiplies the position block of the covariance by `factor` (its rows and columns by
+    /// the square root), keeping its correlations: covariance intersection's inflation of the
+    /// filter's side before an ordinary update.
+    pub fn scale_position_covariance(&mut self, factor: f64) {
+        let s = factor.max(0.0).sqrt();
+        for i in 0..2 {
+            for j in 0..4 {
+                self.cov[(i, j)] *= s;
+                self.cov[(j, i)] *= s;
+            }
+        }
+    }
+
     /// Replaces the (x, y, yaw) block of the covariance, dropping its correlation with the gyro
     /// bias: used after a map-relative fix, whose error is the map's own placement error.
     pub fn set_pose_covariance(&mut self, covariance: &[[f64; 3]; 3]) {

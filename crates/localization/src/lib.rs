@@ -7,6 +7,7 @@
 //! - [`matching`]: terrain map matching: maximum likelihood with branch and bound (paper 000
 //!   section 4) and partial Hausdorff (paper 002 section 3).
 //! - [`lander`]: the rover's position from the lander's stereo sighting (paper 002 section 2).
+//! - [`lander_localizer`]: the `lander` localiser, `ekf-ml` with fixes from lander sightings.
 //! - [`orbital`]: matching the rover's panorama map against an orbital DEM (paper 002 section 5).
 //! - [`orbital_map`]: the `orbital-map` localiser, `ekf-ml` with fixes against an orbital map
 //!   given before the traverse.
@@ -30,6 +31,7 @@ pub mod ekf;
 pub mod ekf_ml;
 pub mod evaluation;
 pub mod lander;
+pub mod lander_localizer;
 pub mod matching;
 pub mod orbital;
 pub mod orbital_map;
@@ -42,6 +44,7 @@ pub use ekf_ml::{EkfMl, EkfMlParams, EkfMlStats};
 pub use matching::{
     HausdorffMatcher, HausdorffParams, MatchError, MatchResult, MlMatcher, MlParams, SearchWindow,
 };
+pub use lander_localizer::{LanderLocalizer, LanderLocalizerParams};
 pub use orbital_map::{OrbitalMapLocalizer, OrbitalMapParams};
 pub use target::{TargetParams, select_target};
 
@@ -58,6 +61,7 @@ pub fn localizer_by_name(name: &str, config: &RoverConfig, initial: Pose3) -> Op
         "ekf" => Some(Box::new(Ekf::new(config, initial))),
         "ekf-ml" => Some(Box::new(EkfMl::new(config, initial))),
         "ekf-ml-targets" => Some(Box::new(EkfMl::with_params(config, initial, targets))),
+        "lander" => Some(Box::new(LanderLocalizer::new(config, initial, Default::default()))),
         _ => None,
     }
 }

@@ -4,7 +4,10 @@
 use crate::params::NavigatorError;
 use crate::params::{Field, Param, Unit};
 use crate::registry::{LocalizerAlias, LocalizerEntry, param_info};
-use rovernav_localization::{DeadReckoning, Ekf, EkfMl, EkfMlParams, OrbitalMapLocalizer, OrbitalMapParams};
+use rovernav_localization::{
+    DeadReckoning, Ekf, EkfMl, EkfMlParams, LanderLocalizer, LanderLocalizerParams, OrbitalMapLocalizer,
+    OrbitalMapParams,
+};
 
 /// The built-in localisers.
 pub const BUILTIN_LOCALIZERS: &[LocalizerEntry] = &[
@@ -46,6 +49,17 @@ pub const BUILTIN_LOCALIZERS: &[LocalizerEntry] = &[
             let map =
                 b.prior_map.ok_or_else(|| NavigatorError::MissingPriorMap { localizer: b.name.into() })?;
             Ok(Box::new(OrbitalMapLocalizer::new(b.rover, b.initial, map, params)))
+        },
+    },
+    LocalizerEntry {
+        name: "lander",
+        doc: "ekf-ml with fixes from a lander's stereo sightings of the rover turning near it (paper 002 section 2)",
+        matches_terrain: true,
+        needs_prior_map: false,
+        params: || param_info(LanderLocalizerParams::default(), lander_params()),
+        build: |b| {
+            let params = b.configured(LanderLocalizerParams::default(), &lander_params())?;
+            Ok(Box::new(LanderLocalizer::new(b.rover, b.initial, params)))
         },
     },
 ];
@@ -138,6 +152,36 @@ pub fn orbital_map_params() -> Vec<Param<OrbitalMapParams>> {
             doc: "factor on an orbital match's covariance before it is fused",
             unit: Unit::Weight,
             field: |c| Field::Real(&mut c.covariance_scale),
+        },
+        Param {
+            name: "covariance_intersection",
+            doc: "fuse orbital fixes by covariance intersection (correlated with the filter); off: as independent",
+            unit: Unit::Switch,
+            field: |c| Field::Bool(&mut c.covariance_intersection),
+        },
+    ]
+}
+
+/// The parameters of `lander` a mission may set (its map matcher keeps `ekf-ml`'s defaults).
+pub fn lander_params() -> Vec<Param<LanderLocalizerParams>> {
+    vec![
+        Param {
+            name: "map_matching",
+            doc: "match the rover's own map between lander fixes (ekf-ml); off: the EKF with lander fixes only",
+            unit: Unit::Switch,
+            field: |c| Field::Bool(&mut c.map_matching),
+        },
+        Param {
+            name: "covariance_scale",
+            doc: "factor on a lander fix's covariance before it is fused",
+            unit: Unit::Weight,
+            field: |c| Field::Real(&mut c.covariance_scale),
+        },
+        Param {
+            name: "independent_after_m",
+            doc: "sightings closer than this to the last fused one are fused by covariance intersection",
+            unit: Unit::PositiveMetres,
+            field: |c| Field::Real(&mut c.independent_after_m),
         },
     ]
 }

@@ -84,7 +84,7 @@ fn unknown_names_and_planners_are_one_line_errors_listing_the_known_ones() {
     assert!(err.contains("`dstar-lite`") && err.contains("`astar`"), "{err}");
     assert!(r.navigator("mrpta", Some("dstar-lite")).is_ok());
     let err = r.localizer("gps", &NavigatorParams::new()).err().unwrap().to_string();
-    let known = "dead-reckoning, ekf, ekf-ml, orbital-map, ekf-ml-targets";
+    let known = "dead-reckoning, ekf, ekf-ml, orbital-map, lander, ekf-ml-targets";
     assert!(!err.contains('\n') && err.contains(known), "{err}");
     let err = r.check_localizer("ekf", &[("min_travel_m".to_string(), 1.0)].into()).unwrap_err().to_string();
     assert!(err.contains("localizer `ekf` takes no parameters"), "{err}");

@@ -35,10 +35,12 @@ use serde::Serialize;
 const PAPER_DOWNRANGE: (f64, f64) = (-8.32, 6.66);
 /// The paper's absolute cross-range error: mean and standard deviation (% of range).
 const PAPER_CROSSRANGE: (f64, f64) = (3.30, 4.07);
-/// Standard deviation of the detected image position used for the fix's covariance (px): the
-/// RMS cross-range error of 40 trials on seeds 1001-1040 (7.9 px; the changed region's box
-/// centre moves with the rover's changing shadow and mast head), never the reported seeds.
-const PIXEL_SIGMA_PX: f64 = 8.0;
+/// Standard deviation of the detected image position used for the fix's covariance (px): one
+/// pixel of image noise; where on the body the changed region's box centre falls (it moves
+/// with the rover's shadow and mast head) is `LanderFixParams::box_sigma_m`, a distance on the
+/// body that does not grow with range (an 8 px sigma, the RMS cross-range error of seeds
+/// 1001-1040, was honest at 2-4 m and twice too wide at 6-10 m).
+const PIXEL_SIGMA_PX: f64 = 1.0;
 
 /// Options of `rovernav eval lander`.
 #[derive(clap::Args, Debug)]

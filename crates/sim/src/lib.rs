@@ -8,6 +8,7 @@
 //! deterministic for a seed. [`true_hazard_grid`] gives the evaluation's ground-truth hazard map.
 
 pub mod hazard;
+pub mod lander_station;
 pub mod navcam;
 pub mod power;
 pub mod raycast;
@@ -20,6 +21,7 @@ pub mod terrain_window;
 pub mod vehicle;
 
 pub use hazard::true_hazard_grid;
+pub use lander_station::LanderStation;
 pub use navcam::NavcamImaging;
 pub use power::{PowerConfig, PowerModel};
 pub use raycast::{HeightField, RayHit};

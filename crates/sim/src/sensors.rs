@@ -152,6 +152,9 @@ pub struct SensorModel {
     /// The solar panel, battery and loads (the mission's `[power]`).
     #[serde(skip)]
     pub power: crate::power::PowerConfig,
+    /// A lander watching the rover's in-place turns (the mission's `[lander]`; none by default).
+    #[serde(skip)]
+    pub lander: Option<crate::lander_station::LanderStation>,
 }
 
 impl Default for SensorModel {
@@ -246,6 +249,7 @@ impl Default for SensorModel {
             stereo: StereoImaging::default(),
             navcam: crate::navcam::NavcamImaging::default(),
             power: crate::power::PowerConfig::default(),
+            lander: None,
         }
     }
 }

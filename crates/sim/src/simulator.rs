@@ -163,8 +163,15 @@ impl Simulator {
             NavCommand::Turn { angle } => {
                 let rate = self.rover.turn_rate;
                 let duration = if rate > 0.0 { angle.abs() / rate } else { 0.0 };
+                let before = self.truth;
                 self.move_wheels(0.0, *angle, duration, DriveGuard::default(), &mut frame);
                 self.rest_sample(&mut frame);
+                if let Some(station) = self.model.lander {
+                    let poses = [before, self.truth];
+                    frame.lander = station
+                        .watch(&self.terrain, &self.field, &self.rover, poses, &mut self.image_rng)
+                        .map(Box::new);
+                }
             }
             NavCommand::Finish(..) => {}
         }

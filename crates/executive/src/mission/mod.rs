@@ -5,6 +5,7 @@
 
 pub mod check;
 mod faults;
+mod lander;
 mod power;
 mod route;
 mod sensors;
@@ -15,6 +16,7 @@ mod terrain;
 pub use faults::{
     DEFAULT_GYRO_JUMP_DEG_S, FaultKindName, FaultSpec, SensorName, Side, check as check_faults,
 };
+pub use lander::LanderSpec;
 pub use power::PowerSpec;
 pub use route::{GoalSpec, PoseSpec};
 pub use sensors::{RangeSourceSpec, RoverSpec, SensorSpec};
@@ -92,6 +94,9 @@ pub struct Mission {
     /// The solar panel, battery, loads and sleep thresholds (`[power]`; defaults: a small rover).
     #[serde(default)]
     pub power: PowerSpec,
+    /// A lander watching the rover's in-place turns (`[lander]`; none by default).
+    #[serde(default)]
+    pub lander: Option<LanderSpec>,
     /// Folder the mission file was read from (relative DEM paths resolve against it first).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -235,6 +240,9 @@ impl Mission {
         };
         if let Err(why) = check::output_name(&self.name) {
             return bad("name", &why);
+        }
+        if let Some(Err((field, why))) = self.lander.as_ref().map(LanderSpec::check) {
+            return bad(field, &why);
         }
         if let Err(why) = check::positive_up_to(self.time_limit_s, 1.0e7, " s") {
             return bad("time_limit_s", &why);

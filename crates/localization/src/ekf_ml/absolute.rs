@@ -78,6 +78,33 @@ impl EkfMl {
         true
     }
 
+    /// Fuses an absolute fix whose error may be correlated with the filter's by covariance
+    /// intersection ([`crate::consistency::covariance_intersection_weight`]): the filter's
+    /// position covariance is inflated by 1 / omega and the fix's by 1 / (1 - omega) before an
+    /// ordinary update, so that the posterior is consistent whatever the correlation. Returns
+    /// whether the fix was fused (on a refusal the filter is left as it was).
+    pub fn fuse_correlated_fix(&mut self, fix: &MatchResult) -> bool {
+        let p = self.ekf.estimate().covariance;
+        let block = |c: &[[f64; 3]; 3]| [[c[0][0], c[0][1]], [c[1][0], c[1][1]]];
+        let Some(w) = crate::consistency::covariance_intersection_weight(&block(&p), &block(&fix.covariance))
+        else {
+            return false;
+        };
+        let mut inflated = *fix;
+        for row in inflated.covariance.iter_mut().take(2) {
+            for v in row.iter_mut().take(2) {
+                *v /= 1.0 - w;
+            }
+        }
+        self.ekf.scale_position_covariance(1.0 / w);
+        if self.fuse_absolute_fix(&inflated) {
+            true
+        } else {
+            self.ekf.scale_position_covariance(w);
+            false
+        }
+    }
+
     /// Moves every map cell within [`KEEP_RADIUS_M`] of `after` rigidly from `before`'s frame
     /// to `after`'s; cells landing in the same cell are merged.
     fn reanchor(&mut self, before: &Pose2, after: &Pose2) {
@@ -156,5 +183,35 @@ mod tests {
         assert!(g.at_world(1.0 + shift - 0.3, 0.3).is_some_and(|h| h.is_nan()));
         assert!(loc.map.cells.len() <= 40 * 20 + 40, "far cells dropped: {}", loc.map.cells.len());
         assert!(loc.map_covariance[0][0] < 2.0 * sigma * sigma);
+    }
+
+    #[test]
+    fn a_correlated_fix_is_fused_by_covariance_intersection() {
+        // Prior diag(1, 9) at the origin, fix diag(4, 1) at (1, 1): omega = 0.3958 (see
+        // consistency's test), information diag(w + (1-w)/4, w/9 + (1-w)) = diag(0.547, 0.648),
+        // the mean P (w P^-1 x_p + (1-w) R^-1 x_r) = (0.276, 0.932).
+        let mut loc = localizer_with_map();
+        loc.ekf.reset_position(0.0, 0.0, 1.0);
+        let heading = loc.estimate().covariance[2][2];
+        loc.ekf.set_pose_covariance(&[[1.0, 0.0, 0.0], [0.0, 9.0, 0.0], [0.0, 0.0, heading]]);
+        let fix = MatchResult {
+            pose: Pose2::new(1.0, 1.0, loc.estimate().pose.yaw),
+            covariance: [[4.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]],
+            log_likelihood: 0.0,
+            failure_probability: 0.0,
+            poses_evaluated: 1,
+        };
+        assert!(loc.fuse_correlated_fix(&fix));
+        let e = loc.estimate();
+        let close = |a: f64, b: f64| (a - b).abs() < 0.02 * b;
+        assert!(
+            close(e.covariance[0][0], 1.0 / 0.547) && close(e.covariance[1][1], 1.0 / 0.648),
+            "{:?}",
+            e.covariance
+        );
+        assert!(close(e.pose.x, 0.276) && close(e.pose.y, 0.932), "{:?}", e.pose);
+        // Twice the ordinary update's variances (diag(0.8, 0.9)): the price of not knowing the
+        // correlation.
+        assert!(e.covariance[0][0] > 2.0 * 0.8 && e.covariance[1][1] > 1.5 * 0.9);
     }
 }

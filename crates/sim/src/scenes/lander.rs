@@ -15,9 +15,11 @@ use rovernav_core::{Pose2, Pose3, RoverConfig};
 use rovernav_vision::{Cahv, CameraModel};
 
 use super::Site;
+use crate::raycast::HeightField;
 use crate::render::{Exposure, Label, RenderSettings, RenderedImage, Rig, Scene, Sun, render};
 use crate::stereo_range::StereoImaging;
 use crate::vehicle::settled_pose;
+use rovernav_terrain::Terrain;
 
 /// Where the rover stands relative to the lander and how the lander aims.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,6 +71,61 @@ pub struct LanderCapture {
     pub after_right: RenderedImage,
 }
 
+/// A lander watching a rover turn on some terrain: what [`LanderTurn::render`] needs.
+#[derive(Clone, Copy, Debug)]
+pub struct LanderTurn<'a> {
+    /// The terrain (its rocks are rendered).
+    pub terrain: &'a Terrain,
+    /// Its height field.
+    pub field: &'a HeightField,
+    /// The rover's body.
+    pub rover: &'a RoverConfig,
+    /// The rig (lander mast position above its foot, baseline, field of view, image size).
+    pub rig: &'a Rig,
+    /// The lander's site pose (mast foot on the ground, world frame).
+    pub site: Pose3,
+}
+
+impl LanderTurn<'_> {
+    /// Renders the three images of a turn from `poses[0]` to `poses[1]` (true poses), the mast
+    /// aimed at the site-frame point `aim`, images noisy for `seed`.
+    pub fn render(&self, poses: [Pose3; 2], aim: [f64; 3], seed: u64) -> LanderCapture {
+        let (rig, lander) = (self.rig, self.site);
+        let (pan, tilt) = rig.lander_aim(aim);
+        let cameras = ["lander", "lander_right"].map(|name| {
+            rig.lander_camera(name, pan, tilt).expect("both lander cameras exist").in_world(&lander, &lander)
+        });
+        let imaging = StereoImaging::default();
+        let sun = Sun::on_mars(imaging.local_time_h, imaging.latitude_deg, imaging.ls_deg);
+        let scene = |pose: &Pose3| {
+            Scene::new(self.terrain, self.field, &sun, imaging.atmosphere).with_rover(self.rover, pose, 0.0)
+        };
+        let auto = RenderSettings::default();
+        let before_img = render(&scene(&poses[0]), &cameras[0], "lander", &auto, seed.wrapping_mul(2));
+        let fixed = RenderSettings {
+            sensor: crate::render::Sensor {
+                exposure: Exposure::Fixed(before_img.exposure),
+                ..auto.sensor.clone()
+            },
+            ..auto.clone()
+        };
+        let after_scene = scene(&poses[1]);
+        let noise = seed.wrapping_mul(2).wrapping_add(1);
+        let after_left = render(&after_scene, &cameras[0], "lander", &fixed, noise);
+        let after_right = render(&after_scene, &cameras[1], "lander_right", &fixed, noise);
+        LanderCapture {
+            site: lander,
+            rig: rig.clone(),
+            pan_tilt: (pan, tilt),
+            poses,
+            cameras,
+            before: before_img,
+            after_left,
+            after_right,
+        }
+    }
+}
+
 impl LanderCapture {
     /// Renders a trial on `site`: the lander 7 m behind the yard's centre along -x, its mast
     /// `rig.lander_position` above its foot, the rover at `setup`, images noisy for `seed`.
@@ -84,38 +141,8 @@ impl LanderCapture {
         let after = settled_pose(dem, rover, Pose2::new(rx, ry, setup.heading + setup.turn));
         // Aim at the dead-reckoned position, half a metre above the ground there.
         let aim = [rx + setup.aim_error[0] - fx, ry + setup.aim_error[1] - fy, before.z + 0.5 - foot];
-        let (pan, tilt) = rig.lander_aim(aim);
-        let cameras = ["lander", "lander_right"].map(|name| {
-            rig.lander_camera(name, pan, tilt).expect("both lander cameras exist").in_world(&lander, &lander)
-        });
-        let imaging = StereoImaging::default();
-        let sun = Sun::on_mars(imaging.local_time_h, imaging.latitude_deg, imaging.ls_deg);
-        let scene = |pose: &Pose3| {
-            Scene::new(&site.terrain, &site.field, &sun, imaging.atmosphere).with_rover(rover, pose, 0.0)
-        };
-        let auto = RenderSettings::default();
-        let before_img = render(&scene(&before), &cameras[0], "lander", &auto, seed.wrapping_mul(2));
-        let fixed = RenderSettings {
-            sensor: crate::render::Sensor {
-                exposure: Exposure::Fixed(before_img.exposure),
-                ..auto.sensor.clone()
-            },
-            ..auto.clone()
-        };
-        let after_scene = scene(&after);
-        let noise = seed.wrapping_mul(2).wrapping_add(1);
-        let after_left = render(&after_scene, &cameras[0], "lander", &fixed, noise);
-        let after_right = render(&after_scene, &cameras[1], "lander_right", &fixed, noise);
-        Self {
-            site: lander,
-            rig: rig.clone(),
-            pan_tilt: (pan, tilt),
-            poses: [before, after],
-            cameras,
-            before: before_img,
-            after_left,
-            after_right,
-        }
+        let turn = LanderTurn { terrain: &site.terrain, field: &site.field, rover, rig, site: lander };
+        turn.render([before, after], aim, seed)
     }
 
     /// The truth the detector seeks: the left-image bounding box (x_min, x_max, y_min, y_max)

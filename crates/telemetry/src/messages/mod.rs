@@ -207,6 +207,7 @@ pub fn without_images(f: &SensorFrame) -> SensorFrame {
         motion_stopped: f.motion_stopped.clone(),
         images: Vec::new(),
         power: f.power,
+        lander: f.lander.clone(),
     }
 }
 
@@ -370,6 +371,7 @@ pub(crate) mod tests {
             motion_stopped: Some("proximity".into()),
             images: Vec::new(),
             power: None,
+            lander: None,
         }
     }
 
