@@ -80,6 +80,8 @@ pub struct Trace {
     /// Wall-clock time the loop spent on each cycle, from the previous command's end to this
     /// one's (s; 0 for the start), for the same samples; empty when unknown.
     pub compute_s: Vec<f64>,
+    /// Every VTT task's designated target and its estimates (site frame), by task id.
+    pub vtt: Vec<crate::deliberative::VttTrace>,
 }
 
 /// Everything a run produces.

@@ -211,6 +211,7 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         observer.on_bus(&runtime.bus().take_tap(tap)?);
     }
     trace.overlays = navigator_of(&runtime).overlays();
+    trace.vtt = deliberative.vtt_traces();
 
     // Operators may have moved the goal: score against the goal the mission ended with.
     if let Some(goal) = deliberative.goal() {

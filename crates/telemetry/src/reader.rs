@@ -9,6 +9,7 @@ use crate::messages::{
 };
 use crate::writer::TelemetryError;
 use rovernav_core::{Grid2, GridGeometry, Point2, Pose3, SensorFrame};
+use rovernav_executive::deliberative::VttTrace;
 use rovernav_executive::{HazardEvent, Report, StageTimes, Trace, World};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -277,6 +278,10 @@ impl LoggedRun {
             estimate: estimates.iter().map(|m| m.estimate.pose).collect(),
             plans: self.plans.iter().filter(|p| p.cycle <= upto).map(|p| p.points.clone()).collect(),
             overlays,
+            // A whole run: every image; a cut: the images taken up to its last cycle's time.
+            vtt: VttTrace::of_records(self.vtt.iter().filter(|r| {
+                cycles.len() >= self.cycles.len() || cycles.last().is_none_or(|c| r.t <= c.sim_time_s)
+            })),
             sensed: Some(sensed),
             sim_time_s: cycles.iter().map(|m| m.sim_time_s).collect(),
             // The logging run's wall clock between cycle markers: the loop's time per cycle.

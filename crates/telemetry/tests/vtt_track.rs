@@ -1,7 +1,8 @@
 //! Visual target tracking's telemetry (issue 35 item 3): a track-only run logged to MCAP holds
 //! one `/bus/vtt/track` record per image the task saw (the task's report counts them), each
 //! with its template, match and score and fitting the topic's derived schema, and replay
-//! rebuilds the report with the task's message.
+//! rebuilds the report with the task's message and the run's traverse picture byte for byte
+//! (the designated target and its estimates included).
 
 use rovernav_executive::{Mission, Run};
 use rovernav_telemetry::messages::topics;
@@ -61,4 +62,15 @@ fn a_track_only_run_logs_one_record_per_image_and_replays() {
     let replay = log.replay().expect("replay");
     let replayed = replay.report.tasks.iter().find(|t| t.kind == "track_target").expect("the task");
     assert_eq!(replayed.message, task.message);
+    // The picture marks the designation and one estimate per later image, from the run's
+    // deliberative layer and from the log alike, and the two pictures are the same bytes.
+    assert_eq!(out.trace.vtt.len(), 1, "{:?}", out.trace.vtt);
+    let site = |k: usize| log.vtt[k].site.expect("a site position");
+    assert_eq!(out.trace.vtt[0].target, site(0));
+    assert_eq!(out.trace.vtt[0].estimates, (1..images).map(site).collect::<Vec<_>>());
+    assert_eq!(replay.trace.vtt, out.trace.vtt);
+    let run_png = rovernav_viz::run_traverse_png(&out.report, &out.world, &out.trace).expect("png");
+    let replay_png =
+        rovernav_viz::run_traverse_png(&replay.report, &replay.world, &replay.trace).expect("png");
+    assert!(run_png == replay_png, "replay draws the run's traverse.png");
 }

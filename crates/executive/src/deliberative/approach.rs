@@ -293,6 +293,15 @@ impl Deliberative {
             })
             .unwrap_or_default()
     }
+
+    /// What the traverse picture draws of every approach and track-only task so far: the
+    /// designated target and its later estimates (the same as [`VttTrace::of_records`] of the
+    /// logged `/vtt/track` records, so a replay draws the same picture).
+    pub fn vtt_traces(&self) -> Vec<super::VttTrace> {
+        let approaches = self.approaches.keys().map(|&id| (id, self.target_estimates(id)));
+        let tracks = self.tracks.keys().map(|&id| (id, self.tracked_estimates(id)));
+        super::VttTrace::of_sites(approaches.chain(tracks))
+    }
 }
 
 fn drive(distance: f64) -> CommandMsg {

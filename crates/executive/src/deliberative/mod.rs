@@ -32,7 +32,7 @@ pub use direct::stop_cause;
 pub use science_summary::{EventSummary, ImageSummary, WatchSummary};
 pub use science_watch::{MAX_INTERVAL_S, Watch, WatchKind, WatchSpec};
 pub use tasks::{Designation, Resource, Role, Task, TaskKind, TaskSpec, validate_plan};
-pub use vtt_telemetry::{MatchMsg, TemplateMsg, VttTrackMsg};
+pub use vtt_telemetry::{MatchMsg, TemplateMsg, VttTrace, VttTrackMsg};
 
 use crate::components::{JausState, Port};
 use crate::fault_protection::{Diagnosis, FaultProtection, FaultProtectionConfig};

@@ -110,3 +110,42 @@ impl VttTrackMsg {
         }
     }
 }
+
+/// What the traverse picture draws of one VTT task: the designated target and the site-frame
+/// estimates of it from the images tracked after the designation, in order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VttTrace {
+    /// The plan task.
+    pub task: u64,
+    /// The target's site position at the designation (m).
+    pub target: [f64; 3],
+    /// The target's site position after each later image tracked (m).
+    pub estimates: Vec<[f64; 3]>,
+}
+
+impl VttTrace {
+    /// One trace per task (by task id) from the site positions of its images in order, the
+    /// designation first; a task with no position is left out.
+    pub fn of_sites(tasks: impl IntoIterator<Item = (u64, Vec<[f64; 3]>)>) -> Vec<Self> {
+        let mut out: Vec<Self> = tasks
+            .into_iter()
+            .filter_map(|(task, sites)| {
+                let (&target, rest) = sites.split_first()?;
+                Some(Self { task, target, estimates: rest.to_vec() })
+            })
+            .collect();
+        out.sort_by_key(|t| t.task);
+        out
+    }
+
+    /// The traces of logged `/vtt/track` records (those with a site position, grouped by task).
+    pub fn of_records<'a>(records: impl IntoIterator<Item = &'a VttTrackMsg>) -> Vec<Self> {
+        let mut by_task: std::collections::BTreeMap<u64, Vec<[f64; 3]>> = Default::default();
+        for r in records {
+            if let Some(site) = r.site {
+                by_task.entry(r.task).or_default().push(site);
+            }
+        }
+        Self::of_sites(by_task)
+    }
+}

@@ -37,6 +37,10 @@ pub const GOAL: RGBColor = RGBColor(255, 200, 0);
 pub const WAYPOINT: RGBColor = RGBColor(0, 230, 230);
 /// The true end and the footprint there.
 pub const TRUE_END: RGBColor = RGBColor(255, 255, 255);
+/// A VTT target as designated.
+pub const VTT_TARGET: RGBColor = RGBColor(255, 70, 160);
+/// The estimates of a VTT target along the way.
+pub const VTT_ESTIMATE: RGBColor = RGBColor(170, 110, 255);
 /// Outlines that keep light marks visible on light ground.
 pub const EDGE: RGBColor = RGBColor(0, 0, 0);
 
@@ -44,7 +48,7 @@ pub const EDGE: RGBColor = RGBColor(0, 0, 0);
 pub const SWATCH: RGBColor = RGBColor(150, 120, 95);
 
 /// Every solid colour marks are drawn in: a PNG palette keeps these exactly.
-pub const SOLID: [RGBColor; 19] = [
+pub const SOLID: [RGBColor; 21] = [
     DRIVEN,
     ESTIMATED,
     PLAN,
@@ -61,6 +65,8 @@ pub const SOLID: [RGBColor; 19] = [
     WAYPOINT,
     EDGE,
     SWATCH,
+    VTT_TARGET,
+    VTT_ESTIMATE,
     RGBColor(255, 0, 0),
     RGBColor(30, 30, 30),
     RGBColor(60, 60, 60),
@@ -83,6 +89,10 @@ pub enum Mark {
     Diamond(RGBColor),
     /// A rectangle outline.
     Outline(RGBColor),
+    /// A + crosshair.
+    Crosshair(RGBColor),
+    /// Small dots joined by a line.
+    Dots(RGBColor),
 }
 
 /// One legend line.
@@ -188,6 +198,12 @@ pub fn entries(scene: &TraverseScene<'_>, frame: &Frame) -> Vec<Entry> {
     out.push(entry(Mark::Ring(GOAL), "goal and its tolerance"));
     if !scene.goal.waypoints.is_empty() {
         out.push(entry(Mark::Diamond(WAYPOINT), "waypoint"));
+    }
+    if trace.vtt.iter().any(|v| !v.estimates.is_empty()) {
+        out.push(entry(Mark::Dots(VTT_ESTIMATE), "target estimates"));
+    }
+    if !trace.vtt.is_empty() {
+        out.push(entry(Mark::Crosshair(VTT_TARGET), "VTT target"));
     }
     if !trace.truth.is_empty() {
         out.push(entry(Mark::Outline(TRUE_END), "rover footprint at the end (truth)"));

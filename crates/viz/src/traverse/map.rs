@@ -1,6 +1,6 @@
 //! The map of a traverse picture: plotters axes in metres over the shaded terrain, then the
 //! marks in the legend's order (rocks, keep-out zones, navigator overlays, plans, paths, hazard
-//! contacts, start, goal, waypoints, the rover's footprint and the two end points).
+//! contacts, start, goal, waypoints, VTT target estimates and targets, the rover's footprint and the two end points).
 
 use super::legend::*;
 use super::{MapPixels, TraverseScene, frame::Frame, raster};
@@ -122,6 +122,19 @@ pub(super) fn draw<DB: DrawingBackend>(
     chart.draw_series(std::iter::once(at(goal) + Circle::new((0, 0), 4, GOAL.filled())))?;
     for w in &scene.goal.waypoints {
         chart.draw_series(std::iter::once(diamond(*w, 6, WAYPOINT)))?;
+    }
+    for vtt in &scene.trace.vtt {
+        let pts: Vec<(f64, f64)> = vtt.estimates.iter().map(|e| (e[0], e[1])).collect();
+        chart.draw_series(segments(pts.clone(), VTT_ESTIMATE.stroke_width(1)))?;
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, VTT_ESTIMATE.filled())))?;
+    }
+    for vtt in &scene.trace.vtt {
+        let t = Point2::new(vtt.target[0], vtt.target[1]);
+        for style in [EDGE.stroke_width(5), VTT_TARGET.stroke_width(3)] {
+            let (h, v) = (vec![(-9, 0), (9, 0)], vec![(0, -9), (0, 9)]);
+            chart.draw_series(std::iter::once(at(t) + PathElement::new(h, style)))?;
+            chart.draw_series(std::iter::once(at(t) + PathElement::new(v, style)))?;
+        }
     }
     if let Some(end) = scene.trace.truth.last() {
         let (c, s) = (end.yaw.cos(), end.yaw.sin());

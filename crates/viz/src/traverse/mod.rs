@@ -93,6 +93,8 @@ impl TraverseScene<'_> {
         let poses = t.truth.iter().chain(&t.estimate).map(|p| Point2::new(p.x, p.y));
         let plans = t.plans.iter().flatten().copied();
         let hazards = self.report.hazard_events.iter().map(|h| Point2::new(h.x, h.y));
+        let vtt = t.vtt.iter().flat_map(|v| std::iter::once(&v.target).chain(&v.estimates));
+        let vtt = vtt.map(|p| Point2::new(p[0], p[1]));
         let tol = self.goal.tolerance.max(0.0);
         let goal_box =
             [-1.0, 1.0].map(|s| Point2::new(self.goal.position.x + s * tol, self.goal.position.y + s * tol));
@@ -102,7 +104,8 @@ impl TraverseScene<'_> {
             .chain(self.goal.waypoints.iter().copied())
             .chain(poses)
             .chain(plans)
-            .chain(hazards);
+            .chain(hazards)
+            .chain(vtt);
         Frame::fit(points, &world)
     }
 }

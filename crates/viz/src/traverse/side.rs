@@ -136,6 +136,18 @@ fn draw_legend<DB: DrawingBackend>(area: &Area<DB>, entries: &[Entry]) -> DrawRe
             Mark::Outline(colour) => {
                 area.draw(&Rectangle::new([(6, y + 3), (26, y + 13)], colour.stroke_width(2)))?;
             }
+            Mark::Crosshair(colour) => {
+                for style in [EDGE.stroke_width(5), colour.stroke_width(3)] {
+                    area.draw(&PathElement::new(vec![(c.0 - 8, c.1), (c.0 + 8, c.1)], style))?;
+                    area.draw(&PathElement::new(vec![(c.0, c.1 - 8), (c.0, c.1 + 8)], style))?;
+                }
+            }
+            Mark::Dots(colour) => {
+                area.draw(&PathElement::new(vec![(5, c.1), (27, c.1)], colour.stroke_width(1)))?;
+                for x in [6, 16, 26] {
+                    area.draw(&Circle::new((x, c.1), 3, colour.filled()))?;
+                }
+            }
         }
         area.draw(&Text::new(e.label.clone(), (40, y), text_style(14.0, false)))?;
     }

@@ -1,10 +1,11 @@
 //! Tests of the traverse picture against what it must show: marks where the axes put them, a
 //! legend naming each overlay kind present, the same bytes for the same run.
 
-use super::legend::{HAZARD_ROCK, overlay_colour};
+use super::legend::{HAZARD_ROCK, VTT_ESTIMATE, VTT_TARGET, overlay_colour};
 use super::*;
 use rovernav_core::{Grid2, GridGeometry, Overlay, OverlayKind, Pose3};
 use rovernav_executive::HazardEvent;
+use rovernav_executive::deliberative::VttTrace;
 use rovernav_terrain::{Dem, Rock};
 
 struct Fixture {
@@ -187,4 +188,32 @@ fn the_legend_lists_a_smaller_rock_only_when_the_map_draws_it() {
         rgb_at(&r, (cx + radius + d, cy)) != rgb_at(&render(&scene(&pebble)).unwrap(), (cx + radius + d, cy))
     });
     assert!(near_outline, "the outline changes the pixels at its radius");
+}
+
+/// A VTT target designated at (12, 5) and estimated along the way: its crosshair's centre, an
+/// estimate's dot away from it, each where the axes put them in their own colour; the legend
+/// lists "VTT target" and "target estimates" with them and neither without.
+#[test]
+fn a_vtt_target_and_its_estimates_are_drawn_where_the_axes_put_them_and_listed_only_then() {
+    let mut f = fixture(vec![]);
+    let plain = render(&scene(&f)).unwrap();
+    f.trace.vtt = vec![VttTrace {
+        task: 1,
+        target: [12.0, 5.0, 0.1],
+        estimates: vec![[10.0, 4.0, 0.1], [11.0, 4.6, 0.1], [11.9, 5.0, 0.1]],
+    }];
+    let r = render(&scene(&f)).unwrap();
+    assert_eq!(rgb_at(&r, r.map.pixel_of(Point2::new(12.0, 5.0))), colour(VTT_TARGET));
+    assert_eq!(rgb_at(&r, r.map.pixel_of(Point2::new(10.0, 4.0))), colour(VTT_ESTIMATE));
+    // Open ground 1 m south of the target is neither.
+    let ground = rgb_at(&r, r.map.pixel_of(Point2::new(12.0, 4.0)));
+    assert!(ground != colour(VTT_TARGET) && ground != colour(VTT_ESTIMATE), "{ground:?}");
+    assert_eq!(plain.map, r.map, "the marks lie inside the same frame");
+    let has = |legend: &[String], words: &str| legend.iter().any(|l| l == words);
+    assert!(has(&r.legend, "VTT target") && has(&r.legend, "target estimates"), "{:?}", r.legend);
+    assert!(!has(&plain.legend, "VTT target") && !has(&plain.legend, "target estimates"));
+    // The designation alone: the target is listed, no estimates.
+    f.trace.vtt[0].estimates.clear();
+    let alone = render(&scene(&f)).unwrap().legend;
+    assert!(has(&alone, "VTT target") && !has(&alone, "target estimates"), "{alone:?}");
 }
