@@ -23,8 +23,8 @@ pub use nav::{
 };
 pub use rover::RoverConfig;
 pub use sensors::{
-    CameraImage, CameraKind, ImuSample, LanderSighting, OdometrySample, PointCloud, PowerReading, ProximityReading,
-    RangeNoise, SensorFrame, SensorNoise, Wedge,
+    CameraImage, CameraKind, ImuSample, LanderSighting, OdometrySample, PointCloud, PowerReading,
+    ProximityReading, RangeNoise, SensorFrame, SensorNoise, Wedge,
 };
 
 /// The folder holding rovernav's real data sets (`ROVERNAV_DATA`, default `../shared/data`).

@@ -41,10 +41,10 @@ pub mod target;
 pub use dead_reckoning::{DeadReckoning, DeadReckoningParams};
 pub use ekf::{Ekf, EkfParams, EkfStats};
 pub use ekf_ml::{EkfMl, EkfMlParams, EkfMlStats};
+pub use lander_localizer::{LanderLocalizer, LanderLocalizerParams};
 pub use matching::{
     HausdorffMatcher, HausdorffParams, MatchError, MatchResult, MlMatcher, MlParams, SearchWindow,
 };
-pub use lander_localizer::{LanderLocalizer, LanderLocalizerParams};
 pub use orbital_map::{OrbitalMapLocalizer, OrbitalMapParams};
 pub use target::{TargetParams, select_target};
 

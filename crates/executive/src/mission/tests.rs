@@ -84,7 +84,10 @@ fn tasks_and_faults_are_read_and_checked() {
         ),
         ("[[tasks]]\nkind = \"panorama\"\nparallel = true\n", "tasks[0].parallel"),
         ("[[tasks]]\nkind = \"track_target\"\nx = 1.0\ny = 1.0\n", "tasks[0].parallel"),
-        ("[[tasks]]\nkind = \"track_target\"\nx = 1.0\ny = 1.0\nstandoff_m = 1.0\nparallel = true\n", "tasks[0].standoff_m"),
+        (
+            "[[tasks]]\nkind = \"track_target\"\nx = 1.0\ny = 1.0\nstandoff_m = 1.0\nparallel = true\n",
+            "tasks[0].standoff_m",
+        ),
         ("[[faults]]\nkind = \"silent_sensor\"\n", "faults[0].sensor"),
         ("[[faults]]\nkind = \"compass_nan\"\nside = \"left\"\n", "faults[0].side"),
         ("[[faults]]\nkind = \"compass_nan\"\nat_cycle = 1\nat_time_s = 2.0\n", "faults[0].at_time_s"),
