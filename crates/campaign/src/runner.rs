@@ -10,6 +10,7 @@ use crate::output::write_atomic;
 use crate::plan::{Job, Plan, TerrainKind};
 use crate::row::Row;
 use rovernav_executive::{Run, RunOutput};
+use rovernav_harness::JudgedRun;
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};

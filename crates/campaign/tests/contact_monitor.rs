@@ -9,7 +9,8 @@ mod navigator;
 
 use rovernav_core::SensorFrame;
 use rovernav_executive::sensor_servers::MAX_BODY_CONTACTS;
-use rovernav_executive::{CycleRecord, Mission, Run, RunObserver, RunOptions, RunSettings, build_world};
+use rovernav_executive::{CycleRecord, Mission, Run, RunObserver, RunOptions, RunSettings};
+use rovernav_harness::{JudgedRun, build_world};
 use rovernav_navigation::{Registry, registry};
 use rovernav_terrain::Rock;
 use rovernav_terrain::procedural::add_rocks;
@@ -43,6 +44,7 @@ fn a_rover_ramming_a_boulder_is_stopped_by_the_contact_monitor_at_its_limit() {
     let options = RunOptions::of(&mission, &world);
     let mut frames = Frames::default();
     let out = Run::new(world, RunSettings::of(&mission))
+        .judged()
         .options(options)
         .origin("rammer")
         .observer(&mut frames)

@@ -6,6 +6,7 @@ mod navigator;
 
 use rovernav_campaign::{CampaignSpec, Plan};
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 use rovernav_navigation::{Registry, registry};
 
 #[test]

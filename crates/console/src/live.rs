@@ -8,7 +8,8 @@
 use crate::hub::Hub;
 use crate::operator::{ConsoleLink, Phase, Plan};
 use rovernav_core::Point2;
-use rovernav_executive::{Mission, Progress, Run, RunOptions, RunOutput, RunSettings, World, build_world};
+use rovernav_executive::{Mission, Progress, Run, RunOutput, RunSettings, World};
+use rovernav_harness::{JudgedRun, build_world, mission_options};
 use rovernav_telemetry::TelemetryRecorder;
 use rovernav_telemetry::messages::{WorldMsg, topics};
 use std::path::PathBuf;
@@ -125,8 +126,8 @@ fn run_inner(config: &LiveRun, hub: &Arc<Hub>, link: &mut ConsoleLink) -> Result
     if config.hold {
         world = wait_for_plan(world, hub, link);
     }
-    let options = RunOptions::of(mission, &world);
-    let run = Run::new(world, RunSettings::of(mission)).options(options).origin(&config.origin);
+    let options = mission_options(mission, &world);
+    let run = Run::new(world, RunSettings::of(mission)).judged().options(options).origin(&config.origin);
     let mut recorder =
         TelemetryRecorder::create_with_tee(&config.log, hub.sink()).map_err(|e| e.to_string())?;
     link.console().set_phase(Phase::Running);

@@ -6,7 +6,8 @@
 use rovernav_console::Hub;
 use rovernav_console::foxglove::{SUBPROTOCOL, router};
 use rovernav_console::server::Server;
-use rovernav_executive::{Run, RunSettings, long_yard_world};
+use rovernav_executive::{Run, RunSettings};
+use rovernav_harness::{JudgedRun, long_yard_world};
 use rovernav_telemetry::schema::check;
 use rovernav_telemetry::{TelemetryRecorder, mcap};
 use serde_json::{Value, json};
@@ -171,7 +172,10 @@ fn a_live_client_receives_what_the_log_holds_and_bad_clients_are_refused_alone()
     // The run, logged with the hub as its tee.
     let mut recorder = recorder;
     let run = std::thread::spawn(move || {
-        let out = Run::new(long_yard_world(2, 4.0, 3.0, 1.0), settings()).observer(&mut recorder).execute();
+        let out = Run::new(long_yard_world(2, 4.0, 3.0, 1.0), settings())
+            .judged()
+            .observer(&mut recorder)
+            .execute();
         recorder.finish().unwrap();
         out.unwrap().report
     });

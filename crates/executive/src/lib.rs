@@ -6,9 +6,12 @@
 //! controller of [`reflexive`], the [`sensor_servers`]) above a platform layer ([`platform`]:
 //! the simulated rover and its tooling arm). They exchange the [`messages`] on a
 //! `rovernav_bus::Bus`; [`graph`] lists the components a run hosts and in which order a step
-//! visits them, [`run`] configures a run ([`Run`]) and its loop drives it, in process or against
-//! a [`remote`] platform, and [`scoring`] judges it against simulator truth. The autonomy only ever sees sensor
-//! messages; ground truth stays inside the simulator and is used solely to score the run.
+//! visits them, [`run`] configures a run ([`Run`]) in a [`world`] it is given and its loop drives
+//! it, in process or against a [`remote`] platform. The executive is what would fly: it does
+//! not judge itself. Building the world from a mission file and judging the run against
+//! simulator truth are the harness's (`rovernav_harness`), which the loop sees through the small
+//! [`judge::Judge`] trait. The autonomy only ever sees sensor messages; ground truth stays inside
+//! the simulator and is used solely to score the run.
 
 pub mod arm_server;
 pub mod camera_server;
@@ -17,7 +20,7 @@ pub mod components;
 pub mod deliberative;
 pub mod fault_protection;
 pub mod graph;
-pub mod horizon;
+pub mod judge;
 pub mod messages;
 pub mod mission;
 pub mod operator;
@@ -30,7 +33,6 @@ pub mod report;
 pub mod run;
 mod run_loop;
 pub mod runtime;
-pub mod scoring;
 pub mod sensor_servers;
 pub mod shadow;
 pub mod world;
@@ -46,6 +48,6 @@ pub use report::{
 };
 pub use run::{
     BusKind, CycleRecord, NoObserver, Progress, Run, RunError, RunObserver, RunOptions, RunOutput,
-    RunSettings, Trace, run_mission,
+    RunSettings, Trace,
 };
-pub use world::{World, WorldError, build_world, long_yard_world};
+pub use world::{World, WorldError};

@@ -11,10 +11,11 @@
 //! process's runtime drives its stand-in, so a two-process run is the single-process run exactly
 //! (messages cross as JSON, whose floats round-trip bit for bit).
 //!
-//! Truth stays with the server. The rover process learns the simulated clock (which the
-//! platform's frames carry anyway) and, once the mission has ended, the scoring: the rover sends
-//! [`PlatformCall::Finish`] with the goal the mission ended with and its final estimate; the
-//! server answers with a [`Scoring`] computed from truth (goal and localisation errors, distance
+//! Truth stays with the server and its judge ([`crate::judge::Judge`], the harness's; the
+//! harness's `platform_server` builds a judged server). The rover process learns the simulated
+//! clock (which the platform's frames carry anyway) and, once the mission has ended, the scoring:
+//! the rover sends [`PlatformCall::Finish`] with the goal the mission ended with and its final
+//! estimate; the server answers with a [`Scoring`] its judge computed from truth (goal and localisation errors, distance
 //! driven, hazard contacts and events, optimal length, the true track and sensed cells for the
 //! picture), which the run's loop merges with what the rover side knows (outcome, cycles,
 //! components, tasks, fault) into the usual [`crate::report::Report`].
@@ -23,10 +24,10 @@
 //! rover`); [`LocalLink`] fills it in process, through JSON, for tests.
 
 use crate::components::{Component, ComponentFault, Ctx, JausState, Port, Ports};
+use crate::judge::Judge;
 use crate::messages::{FrameMsg, HoldMsg, MotionRequest, PoseMsg, RideAlongMsg, TaskStatusMsg, topics};
 use crate::platform::{ScheduledFault, SimPlatform};
 use crate::report::HazardEvent;
-use crate::scoring::Scorer;
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, Subscriber, TapId, Topic, decode, encode};
 use rovernav_core::{Point2, Pose3};
@@ -163,17 +164,19 @@ pub struct PlatformServer {
     bus: Bus,
     platform: SimPlatform,
     tap: TapId,
-    scorer: Scorer,
+    judge: Box<dyn Judge>,
+    cycles: u64,
     finished: bool,
 }
 
 impl PlatformServer {
-    /// A server for a mission's world, seed and scheduled faults.
+    /// A server for a mission's world, seed and scheduled faults, judged by `judge`.
     pub fn new(
         world: World,
         mission: &str,
         seed: u64,
         faults: Vec<ScheduledFault>,
+        mut judge: Box<dyn Judge>,
     ) -> Result<Self, BusError> {
         let sim = Simulator::new(
             world.terrain.clone(),
@@ -186,8 +189,9 @@ impl PlatformServer {
         let mut bus = Bus::in_process();
         platform.connect(&mut bus)?;
         let tap = bus.tap()?;
-        let scorer = Scorer::new(&world, platform.sim().truth());
-        Ok(Self { world, mission: mission.to_string(), seed, bus, platform, tap, scorer, finished: false })
+        judge.start(&world, platform.sim().truth());
+        let mission = mission.to_string();
+        Ok(Self { world, mission, seed, bus, platform, tap, judge, cycles: 0, finished: false })
     }
 
     /// Whether a [`PlatformCall::Finish`] has been answered (the serving loop may stop).
@@ -197,7 +201,7 @@ impl PlatformServer {
 
     /// Commands executed so far.
     pub fn cycles(&self) -> u64 {
-        self.scorer.cycles()
+        self.cycles
     }
 
     /// The simulator (truth: for the simulator process's own log lines).
@@ -253,7 +257,8 @@ impl PlatformServer {
             PlatformCall::Finish { .. } => {}
         }
         for e in self.platform.take_executed() {
-            self.scorer.record(&e);
+            self.cycles += 1;
+            self.judge.record(&e);
         }
         let mut outputs = Vec::new();
         for record in self.bus.take_tap(self.tap)? {
@@ -268,7 +273,7 @@ impl PlatformServer {
 
     fn score(&mut self, goal: Point2, estimate: Pose3) -> Scoring {
         self.world.goal.position = goal;
-        let mut scoring = self.scorer.scoring(&self.world, self.platform.sim(), estimate);
+        let mut scoring = self.judge.judge(&self.world, self.platform.sim(), estimate).into_scoring();
         scoring.injected_faults =
             crate::run_loop::fault_reports(self.platform.injected_faults(), scoring.hazard_contacts);
         scoring

@@ -4,11 +4,15 @@
 //!
 //! The loop itself ([`crate::run_loop`]) holds no autonomy: the deliberative layer presents the
 //! plan to the components of the graph ([`crate::graph`]), which the runtime steps on simulated
-//! time; the loop watches (truth for the report and pictures through [`crate::scoring`], observer
-//! callbacks, operator lines and answers).
+//! time; the loop watches (observer callbacks, operator lines and answers) and asks the run's
+//! judge ([`crate::judge`], supplied by the harness) for the truth-based figures and pictures.
+//!
+//! A run is given its world; building one from a mission file is the harness's
+//! (`rovernav_harness`: `Run::mission` with its `JudgedRun` trait in scope).
 
 use crate::deliberative::TaskSpec;
 use crate::fault_protection::FaultProtectionConfig;
+use crate::judge::Judge;
 use crate::mission::Mission;
 use crate::operator::OperatorLink;
 use crate::platform::{ArmConfig, ScheduledFault};
@@ -16,7 +20,7 @@ use crate::reflexive::PoseEstimatorConfig;
 use crate::remote::PlatformLink;
 use crate::report::Report;
 use crate::runtime::RuntimeError;
-use crate::world::{World, WorldError, build_world};
+use crate::world::{World, WorldError};
 use rovernav_bus::{BusError, Record};
 use rovernav_core::{Grid2, NavCommand, Overlay, Point2, Pose3, PoseEstimate, SensorFrame};
 
@@ -60,6 +64,14 @@ pub enum RunError {
     /// A bus operation of the deliberative layer or the loop failed.
     #[error(transparent)]
     Bus(#[from] BusError),
+    /// A run against the simulator in process was given no judge.
+    #[error(
+        "{origin}: a run against the simulator in process needs a judge (rovernav_harness: Run::mission or .judged())"
+    )]
+    NoJudge {
+        /// The run's mission source.
+        origin: String,
+    },
 }
 
 /// What the loop records for pictures and replay.
@@ -246,7 +258,7 @@ pub struct RunOptions {
     /// The bus.
     pub bus: BusKind,
     /// The tiled terrain the simulator drives on through a window (`kind = "tiled"`; none for a
-    /// fixed terrain).
+    /// fixed terrain; the harness's `mission_options` fills it from a mission).
     pub tiles: Option<crate::world::TiledSource>,
     /// Whether the report gives the process's peak resident memory (`peak_rss_mb`).
     pub measure_peak_rss: bool,
@@ -258,14 +270,14 @@ pub struct RunOptions {
 }
 
 impl RunOptions {
-    /// The tasks and faults of a mission file (targets mapped into the world's local frame).
+    /// The tasks and faults of a mission file (targets mapped into the world's local frame);
+    /// the simulator's tiles are the harness's to build (`rovernav_harness::mission_options`).
     pub fn of(mission: &Mission, world: &World) -> Self {
         let to_local = crate::world::goal_frame_to_local(mission, world);
         Self {
             tasks: mission.plan_tasks(&to_local),
             faults: mission.fault_schedule(),
             crashes: mission.crash_schedule(),
-            tiles: crate::world::tiled_source(mission),
             power: mission.power.policy(),
             shadow_navigator: mission.shadow_navigator_spec(),
             ..Self::default()
@@ -273,40 +285,28 @@ impl RunOptions {
     }
 }
 
-/// Runs a mission to completion with a progress callback: `Run::mission(mission, origin)`,
-/// `.progress(on_progress).execute()`, kept for callers not yet moved to [`Run`].
-pub fn run_mission(
-    mission: &Mission,
-    origin: &str,
-    on_progress: &mut dyn FnMut(&Progress),
-) -> Result<RunOutput, RunError> {
-    Run::mission(mission, origin)?.progress(on_progress).execute()
-}
-
 /// A run, configured step by step and then executed: the one entry point of every run, in
 /// process or against a remote platform.
 ///
-/// ```no_run
-/// # use rovernav_executive::{Mission, Run};
-/// let mission = Mission::default_mission();
-/// let output = Run::mission(&mission, "built-in default mission")?.execute()?;
-/// println!("{}", output.report.outcome);
-/// # Ok::<(), rovernav_executive::RunError>(())
-/// ```
+/// A mission file's run comes from the harness, which builds the world and supplies the
+/// judge: `Run::mission(&mission, "built-in default mission")?.execute()?` with
+/// `rovernav_harness::JudgedRun` in scope; a hand-built world's run is
+/// `Run::new(world, settings).judge(judge)`.
 pub struct Run<'a> {
     pub(crate) world: World,
     pub(crate) settings: RunSettings,
     pub(crate) options: RunOptions,
     pub(crate) origin: String,
     pub(crate) link: Option<Box<dyn PlatformLink>>,
+    pub(crate) judge: Option<Box<dyn Judge>>,
     pub(crate) observer: Option<&'a mut dyn RunObserver>,
     pub(crate) operator: Option<&'a mut dyn OperatorLink>,
     pub(crate) progress: Option<&'a mut dyn FnMut(&Progress)>,
 }
 
 impl<'a> Run<'a> {
-    /// A traverse of `settings` in a given world (hand-built scenario terrains), without extra
-    /// tasks or faults, against the simulator in process.
+    /// A traverse of `settings` in a given world, without extra tasks or faults, against the
+    /// simulator in process (which needs a [`Run::judge`]).
     pub fn new(world: World, settings: RunSettings) -> Self {
         Self {
             world,
@@ -314,21 +314,11 @@ impl<'a> Run<'a> {
             options: RunOptions::default(),
             origin: "run".into(),
             link: None,
+            judge: None,
             observer: None,
             operator: None,
             progress: None,
         }
-    }
-
-    /// A mission file's run: its world, settings, tasks and scheduled faults. `origin` names the
-    /// mission source in error messages.
-    pub fn mission(mission: &Mission, origin: &str) -> Result<Self, RunError> {
-        let mut world = build_world(mission, origin)?;
-        if let Some(lander) = &mission.lander {
-            world.sensor_model.lander = Some(lander.station(world.start.x, world.start.y));
-        }
-        let options = RunOptions::of(mission, &world);
-        Ok(Self::new(world, RunSettings::of(mission)).options(options).origin(origin))
     }
 
     /// Replaces the tasks, faults, component parameters and bus.
@@ -367,10 +357,18 @@ impl<'a> Run<'a> {
         self
     }
 
+    /// The judge of a run against the simulator in process (the harness's `Scorer`): told every
+    /// executed command, it gives the truth-based figures, the true track and the sensed cells.
+    pub fn judge(mut self, judge: Box<dyn Judge>) -> Self {
+        self.judge = Some(judge);
+        self
+    }
+
     /// Drives a platform across `link` instead of the simulator in process (the rover process's
     /// half of a two-process run): the world then gives only the rover's configuration, start,
     /// goal and keep-out zones, scheduled faults are the simulator process's business, and the
-    /// truth-based figures come back from the simulator at the end. Observers get the bus and the
+    /// truth-based figures come back from the simulator process's judge at the end (a judge
+    /// given to this side is not used). Observers get the bus and the
     /// final report, not per-cycle records (they carry truth this side lacks).
     pub fn remote(mut self, link: Box<dyn PlatformLink>) -> Self {
         self.link = Some(link);

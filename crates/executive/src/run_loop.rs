@@ -11,12 +11,14 @@
 //!
 //! The platform is either the simulator in process or a stand-in across a link
 //! ([`crate::remote::RemotePlatform`]); the loop is the same. What differs is who holds the truth:
-//! in process a [`Scorer`] records it here as commands execute; across a link the simulator
-//! process records it and sends the [`crate::scoring::Scoring`] when the mission has ended.
+//! in process the run's [`Judge`] (the harness's) is told every executed command here; across a
+//! link the simulator process's judge is, and its [`crate::judge::Scoring`] comes back when the
+//! mission has ended.
 
 use crate::components::{Component, Port};
 use crate::deliberative::{Deliberative, DeliberativeConfig};
 use crate::graph::{Parts, assemble as assemble_graph};
+use crate::judge::{Judge, Judgement};
 use crate::messages::{ControlAction, topics};
 use crate::operator::OperatorLink;
 use crate::platform::{FaultTrigger, InjectedFault, ScheduledCrash, SimPlatform};
@@ -28,7 +30,6 @@ use crate::run::{
     RunSettings, Trace,
 };
 use crate::runtime::Runtime;
-use crate::scoring::{Judgement, Scorer};
 use crate::world::World;
 use rovernav_bus::{Bus, BusError, InProcessTransport, Subscriber, TapId};
 use rovernav_core::{Navigator, Point2, Pose3};
@@ -90,7 +91,13 @@ fn record_sample(trace: &mut Trace, estimate: Pose3, t: f64, clock: &mut Instant
 
 /// Executes a configured run.
 pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
-    let Run { mut world, settings, options, origin, link, observer, mut operator, progress } = run;
+    let Run { mut world, settings, options, origin, link, judge, observer, mut operator, progress } = run;
+    // In process the truth is judged here; across a link, by the simulator process.
+    let mut judge: Option<Box<dyn Judge>> = match (&link, judge) {
+        (Some(_), _) => None,
+        (None, Some(judge)) => Some(judge),
+        (None, None) => return Err(RunError::NoJudge { origin }),
+    };
     let mut no_observer = NoObserver;
     let observer: &mut dyn RunObserver = match observer {
         Some(o) => o,
@@ -107,11 +114,9 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         wire_deliberative(&mut runtime, &world, &settings, &options, observer)?;
 
     let mut trace = Trace::default();
-    // In process the truth is recorded here; across a link, by the simulator process.
-    let mut scorer = None;
-    if !remote {
+    if let Some(judge) = judge.as_mut() {
         let platform = sim_platform(&runtime);
-        scorer = Some(Scorer::new(&world, platform.sim().truth()));
+        judge.start(&world, platform.sim().truth());
         let first_frame = platform.initial_frame().clone();
         trace.estimate.push(estimator(&runtime).estimate().pose);
         trace.sim_time_s.push(first_frame.t);
@@ -131,11 +136,11 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
     let mut crashes = options.crashes.clone();
     let mut crashed = Vec::new();
     let (outcome, message) = loop {
-        let now = match scorer {
+        let now = match judge {
             Some(_) => sim_platform(&runtime).sim().time(),
             None => remote_platform(&mut runtime).sim_time(),
         };
-        inject_due_crashes(&mut runtime, &mut crashes, &mut crashed, cycles, now, scorer.is_some());
+        inject_due_crashes(&mut runtime, &mut crashes, &mut crashed, cycles, now, judge.is_some());
         if let Some(link) = operator.as_deref_mut() {
             for line in link.poll(cycles, deliberative.waiting()) {
                 runtime.bus().publish(topics::OPERATOR_COMMAND, line)?;
@@ -173,11 +178,11 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
                 route_to_go_m: crate::run::route_to_go(at, &route),
             }
         };
-        match scorer.as_mut() {
-            Some(scorer) => {
+        match judge.as_mut() {
+            Some(judge) => {
                 for e in sim_platform_mut(&mut runtime).take_executed() {
                     cycles += 1;
-                    scorer.record(&e);
+                    judge.record(&e);
                     record_sample(&mut trace, estimate.pose, e.frame.t, &mut cycle_clock);
                     observer.on_cycle(&CycleRecord {
                         cycle: cycles,
@@ -218,8 +223,8 @@ pub(crate) fn drive(run: Run<'_>) -> Result<RunOutput, RunError> {
         world.goal.position = goal;
     }
     let estimate = estimator(&runtime).estimate().pose;
-    let judgement = match scorer {
-        Some(scorer) => scorer.judge(&world, sim_platform(&runtime).sim(), estimate),
+    let judgement = match judge.as_mut() {
+        Some(judge) => judge.judge(&world, sim_platform(&runtime).sim(), estimate),
         None => {
             let scoring = remote_platform(&mut runtime)
                 .finish(world.goal.position, estimate)
@@ -439,7 +444,7 @@ fn inject_due_crashes(
 fn injected_faults(
     runtime: &Runtime,
     crashed: &[InjectedFault],
-    scoring: &crate::remote::Scoring,
+    scoring: &crate::judge::Scoring,
     remote: bool,
 ) -> Vec<InjectedFaultReport> {
     let mut all = fault_reports(crashed, scoring.hazard_contacts);

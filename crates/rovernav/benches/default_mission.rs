@@ -5,6 +5,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 
 fn default_mission(c: &mut Criterion) {
     let mission = Mission::default_mission();

@@ -159,7 +159,8 @@ mod with {
         LinkError, PLATFORM_REPLY, PLATFORM_REQUEST, PlatformLink, PlatformReply, PlatformRequest,
         PlatformServer,
     };
-    use rovernav_executive::{Mission, OperatorLink, Run, RunOptions, RunSettings, build_world};
+    use rovernav_executive::{Mission, OperatorLink, Run, RunOptions, RunSettings};
+    use rovernav_harness::{build_world, platform_server};
     use std::collections::VecDeque;
     use std::path::PathBuf;
     use std::sync::{Arc, Mutex, MutexGuard};
@@ -297,7 +298,7 @@ mod with {
         let (mission, origin) = load(&args.mission, args.seed, None)?;
         let world = build_world(&mission, &origin)?;
         let faults = RunOptions::of(&mission, &world).faults;
-        let mut server = PlatformServer::new(world, &mission.name, mission.seed, faults)?;
+        let mut server = platform_server(world, &mission.name, mission.seed, faults)?;
 
         let mut t = ZenohTransport::open(&ZenohConfig::listen(endpoint.clone()).with_mode(Mode::Router))?;
         let requests = t.subscribe(TopicFilter::Exact(PLATFORM_REQUEST.name().into()))?;

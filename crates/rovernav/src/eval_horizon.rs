@@ -1,7 +1,7 @@
 //! `rovernav eval horizon`: the sensing-horizon reference on the default Mars yard (or on a
 //! mission file's terrain).
 //!
-//! For each seed, the idealised rover of [`rovernav_executive::horizon`] (true hazards sensed
+//! For each seed, the idealised rover of [`rovernav_harness::horizon`] (true hazards sensed
 //! without noise or occlusion within the range, everything sensed remembered, unsensed ground
 //! free, shortest path replanned) drives from the start to the goal. Its distance over the
 //! optimal length is the path ratio that sensing horizon allows; a navigator's excess over it is
@@ -12,8 +12,9 @@ use crate::eval_terrain::parse_seed_range;
 use anyhow::Context;
 use rayon::prelude::*;
 use rovernav_campaign::{Row, TerrainKind};
-use rovernav_executive::horizon::{HorizonConfig, HorizonRun, horizon_reference};
-use rovernav_executive::{Mission, build_world};
+use rovernav_executive::Mission;
+use rovernav_harness::build_world;
+use rovernav_harness::horizon::{HorizonConfig, HorizonRun, horizon_reference};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

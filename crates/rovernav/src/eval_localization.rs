@@ -111,7 +111,7 @@ pub struct LoopResult {
 
 /// A long procedural yard with a start at its west end and a goal `length` metres east.
 pub fn closed_loop_world(seed: u64, length: f64) -> World {
-    rovernav_executive::long_yard_world(seed, length, 40.0, 10.0)
+    rovernav_harness::long_yard_world(seed, length, 40.0, 10.0)
 }
 
 /// Drives a world with a navigator and a localiser through the simulator; returns the result

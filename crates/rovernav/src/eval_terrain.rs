@@ -14,7 +14,8 @@
 
 use anyhow::Context;
 use rovernav_core::{NavCommand, Point2, Pose3, PoseEstimate, SenseRequest};
-use rovernav_executive::{Mission, build_world};
+use rovernav_executive::Mission;
+use rovernav_harness::build_world;
 use rovernav_navigation::params::configured;
 use rovernav_navigation::roverbug::{RoverBugConfig, c_obstacle_terrain, safety_terrain};
 use rovernav_navigation::{NavigatorParams, TerrainModel};

@@ -3,6 +3,7 @@
 
 use rovernav_executive::remote::NoLink;
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 use std::path::PathBuf;
 
 /// Options of `rovernav graph`.

@@ -18,6 +18,7 @@
 
 use crate::RunArgs;
 use rovernav_executive::{OperatorLink, Run};
+use rovernav_harness::JudgedRun;
 use std::io::{BufRead, Write};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
 use std::time::Duration;

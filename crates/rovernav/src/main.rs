@@ -26,6 +26,7 @@ mod stereo_cmd;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

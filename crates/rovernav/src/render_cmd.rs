@@ -4,7 +4,8 @@
 
 use anyhow::Context;
 use rovernav_core::Pose3;
-use rovernav_executive::{Mission, build_world};
+use rovernav_executive::Mission;
+use rovernav_harness::build_world;
 use rovernav_sim::render::{Atmosphere, CAMERA_NAMES, RenderSettings, Rig, Scene, Sun, render};
 use std::path::{Path, PathBuf};
 
@@ -83,7 +84,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if !(args.pan.is_finite() && args.tilt.is_finite() && args.tilt.abs() <= 90.0) {
         anyhow::bail!("--pan/--tilt: must be finite degrees, tilt within [-90, 90]");
     }
-    let rig = Rig::new(&rovernav_executive::world::rover_config(&mission)).with_size(args.size);
+    let rig = Rig::new(&rovernav_harness::rover_config(&mission)).with_size(args.size);
     let (pan, tilt) = (args.pan.to_radians(), args.tilt.to_radians());
     let Some(camera) = rig.camera(&args.camera, pan, tilt) else {
         anyhow::bail!("--camera: unknown camera `{}` (known: {})", args.camera, CAMERA_NAMES.join(", "));

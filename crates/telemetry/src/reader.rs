@@ -8,9 +8,11 @@ use crate::messages::{
     TruthMsg, WorldMsg, topics, without_images,
 };
 use crate::writer::TelemetryError;
-use rovernav_core::{Grid2, GridGeometry, Point2, Pose3, SensorFrame};
+use rovernav_core::{Point2, Pose3, SensorFrame};
 use rovernav_executive::deliberative::VttTrace;
+use rovernav_executive::judge::sensed_grid;
 use rovernav_executive::{HazardEvent, Report, StageTimes, Trace, World};
+use rovernav_harness::mark_sensed;
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use std::collections::{BTreeMap, HashMap};
@@ -262,7 +264,7 @@ impl LoggedRun {
         let frames = self.per_cycle(&self.frames, |m| m.cycle, topics::SENSOR_FRAME, upto)?;
         let cycles = self.per_cycle(&self.cycles, |m| m.cycle, topics::CYCLE, upto)?;
         let truth: Vec<Pose3> = truths.iter().map(|m| m.pose).collect();
-        let mut sensed = Grid2::filled(sensed_geometry(world), false);
+        let mut sensed = sensed_grid(world);
         // The loop marks the clouds of executed commands only, placed with the true pose.
         for (frame, pose) in frames.iter().zip(&truth).skip(1) {
             for cloud in &frame.frame.clouds {
@@ -332,7 +334,7 @@ impl LoggedRun {
             ),
             goal_error_m: Point2::new(truth.x, truth.y).dist(goal),
             distance_driven_m: distance,
-            optimal_length_m: rovernav_executive::world::optimal_length(world),
+            optimal_length_m: rovernav_harness::optimal_length(world),
             hazard_contacts: final_truth.hazard_contacts,
             sim_time_s: last.sim_time_s,
             wall_time_s: last.wall_time_s,
@@ -353,27 +355,5 @@ impl LoggedRun {
             compute_per_cycle: StageTimes::default(),
             ..Report::default()
         })
-    }
-}
-
-/// The grid the loop marks sensed cells in: the DEM's extent at its resolution, 0.1 m at finest.
-fn sensed_geometry(world: &World) -> GridGeometry {
-    let dem = *world.terrain.dem.geometry();
-    let res = dem.resolution.max(0.1);
-    GridGeometry {
-        cols: (dem.width_m() / res).ceil() as usize,
-        rows: (dem.height_m() / res).ceil() as usize,
-        resolution: res,
-        ..dem
-    }
-}
-
-/// Marks the cells a cloud's points fall in, placed with the true pose (display only).
-fn mark_sensed(sensed: &mut Grid2<bool>, truth: &Pose3, cloud: &rovernav_core::PointCloud) {
-    for p in &cloud.points {
-        let w = truth.transform([p[0] as f64, p[1] as f64, p[2] as f64]);
-        if let Some((c, r)) = sensed.geometry.cell_of(w[0], w[1]) {
-            *sensed.get_mut(c, r) = true;
-        }
     }
 }

@@ -2,7 +2,8 @@
 //! every cycle agreeing with the logged estimate and truth, the belief map on every cycle that
 //! brought range data and agreeing with the true terrain, the plan in the scene as announced.
 
-use rovernav_executive::{Run, RunSettings, long_yard_world};
+use rovernav_executive::{Run, RunSettings};
+use rovernav_harness::{JudgedRun, long_yard_world};
 use rovernav_telemetry::foxglove::{FrameTransformMsg, GridMsg, SceneUpdateMsg, topics as fox};
 use rovernav_telemetry::messages::topics;
 use rovernav_telemetry::{FlushPolicy, TelemetryRecorder, TelemetryWriter, mcap, parse_log};
@@ -27,8 +28,11 @@ fn logged() -> (Vec<u8>, ByTopic) {
         name: "foxglove-yard".into(),
         navigator_params: Default::default(),
     };
-    let out =
-        Run::new(long_yard_world(5, 6.0, 4.0, 1.0), settings).observer(&mut recorder).execute().unwrap();
+    let out = Run::new(long_yard_world(5, 6.0, 4.0, 1.0), settings)
+        .judged()
+        .observer(&mut recorder)
+        .execute()
+        .unwrap();
     recorder.finish().unwrap();
     assert_eq!(out.report.outcome, "reached");
     let bytes = std::fs::read(&path).unwrap();

@@ -1,7 +1,8 @@
 //! A small traverse logged with the recorder, read back and replayed: the replay must rebuild
 //! exactly what the loop produced, and a log cut anywhere must replay up to its last cycle.
 
-use rovernav_executive::{Run, RunOutput, RunSettings, long_yard_world};
+use rovernav_executive::{Run, RunOutput, RunSettings};
+use rovernav_harness::{JudgedRun, long_yard_world};
 use rovernav_telemetry::messages::topics;
 use rovernav_telemetry::schema::check;
 use rovernav_telemetry::{FlushPolicy, TelemetryRecorder, TelemetryWriter, parse_log, read_log};
@@ -46,7 +47,7 @@ fn logged_run(name: &str) -> (RunOutput, TempLog) {
     let policy = FlushPolicy { max_interval: Duration::from_secs(3600), max_chunk_bytes: 1 };
     let mut recorder = TelemetryRecorder::new(TelemetryWriter::create(path, policy).unwrap()).unwrap();
     let world = long_yard_world(3, 5.0, 4.0, 1.0);
-    let output = Run::new(world, settings()).observer(&mut recorder).execute().unwrap();
+    let output = Run::new(world, settings()).judged().observer(&mut recorder).execute().unwrap();
     recorder.finish().unwrap();
     (output, log_file)
 }
@@ -227,6 +228,7 @@ fn a_run_that_panics_still_leaves_a_finished_log_of_every_cycle_it_ran() {
         // Owned by the closure: unwinding drops it, as a panic in `rovernav run` would.
         let mut observer = PanicsAfter { recorder, cycle: 4 };
         Run::new(long_yard_world(3, 5.0, 4.0, 1.0), settings())
+            .judged()
             .observer(&mut observer)
             .execute()
             .map(|o| o.report.cycles)

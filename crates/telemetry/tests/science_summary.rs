@@ -4,7 +4,8 @@
 //! accounting for every image.
 
 use rovernav_executive::deliberative::WatchSummary;
-use rovernav_executive::{Mission, Run, RunOptions, RunSettings, build_world};
+use rovernav_executive::{Mission, Run, RunOptions, RunSettings};
+use rovernav_harness::{JudgedRun, build_world};
 use rovernav_telemetry::messages::topics;
 use rovernav_telemetry::schema::check;
 use rovernav_telemetry::{TelemetryRecorder, read_log};
@@ -36,7 +37,11 @@ fn a_cloud_watch_waits_its_interval_and_logs_a_summary_of_every_image() {
     let path = dir.join("telemetry.mcap");
     let mut recorder = TelemetryRecorder::create(&path).expect("log");
     let options = RunOptions::of(&mission, &world);
-    let out = Run::new(world, RunSettings::of(&mission)).options(options).observer(&mut recorder).execute();
+    let out = Run::new(world, RunSettings::of(&mission))
+        .judged()
+        .options(options)
+        .observer(&mut recorder)
+        .execute();
     recorder.finish().expect("log finished");
     let out = out.expect("run");
     let log = read_log(&path).expect("log read back");

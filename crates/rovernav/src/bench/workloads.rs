@@ -6,6 +6,7 @@ use super::edt::{chamfer_3_4, felzenszwalb_huttenlocher, random_occupancy};
 use super::report::{Row, alternate};
 use anyhow::{Context, anyhow, ensure};
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 use rovernav_localization::benchmark::{
     MatcherWorkload, compare, localisation_workload, scan_window_workload,
 };

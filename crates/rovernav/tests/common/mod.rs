@@ -4,7 +4,7 @@
 /// executive tests' small yard with its usual goal.
 pub const SMALL_YARD: &str = concat!(
     "name = \"small-yard\"\nseed = 3\n",
-    include_str!("../../../executive/tests/common/small_yard.toml"),
+    include_str!("../../../harness/tests/common/small_yard.toml"),
     "[goal]\nx = 9.5\ny = 8.5\n"
 );
 

@@ -230,7 +230,7 @@ mod tests {
 
     #[test]
     fn a_sensed_patch_is_published_where_it_lies_with_its_heights() {
-        let world = rovernav_executive::long_yard_world(1, 5.0, 4.0, 1.0);
+        let world = rovernav_harness::long_yard_world(1, 5.0, 4.0, 1.0);
         let mut map = BeliefMap::new(&world);
         assert!(map.grids(0.0, "map").is_none(), "nothing sensed yet");
         // A flat patch 0.3 m high, 2..3 m ahead of a rover at the start.
@@ -274,7 +274,7 @@ mod tests {
 
     #[test]
     fn a_long_traverse_gets_coarser_cells_not_more_of_them() {
-        let mut world = rovernav_executive::long_yard_world(1, 5.0, 4.0, 1.0);
+        let mut world = rovernav_harness::long_yard_world(1, 5.0, 4.0, 1.0);
         let near = BeliefMap::new(&world).model().world().geometry();
         assert_eq!(near.resolution, GridNavigatorConfig::default().map_resolution);
         world.goal.position = rovernav_core::Point2::new(3000.0, 2000.0);

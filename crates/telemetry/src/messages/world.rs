@@ -118,7 +118,7 @@ mod tests {
     use rovernav_core::Point2;
 
     fn small_world() -> World {
-        let mut w = rovernav_executive::long_yard_world(7, 3.0, 2.0, 0.5);
+        let mut w = rovernav_harness::long_yard_world(7, 3.0, 2.0, 0.5);
         w.terrain.dem.heights.data[5] = f32::NAN;
         w.terrain.dem.nodata = Some(-32768.0);
         w.terrain.dem.geo = GeoReference { crs: "Mars2000".into(), easting: 1234.5, northing: -0.1 };

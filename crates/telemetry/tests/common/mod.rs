@@ -1,7 +1,8 @@
 //! Logs shared by the telemetry tests: a short traverse logged as `rovernav run` logs it (zstd),
 //! and the same messages re-encoded with lz4 (what earlier rovernav logs and other writers use).
 
-use rovernav_executive::{Run, RunSettings, long_yard_world};
+use rovernav_executive::{Run, RunSettings};
+use rovernav_harness::{JudgedRun, long_yard_world};
 use rovernav_telemetry::{FlushPolicy, TelemetryRecorder, TelemetryWriter, mcap};
 use std::io::Cursor;
 use std::time::Duration;
@@ -21,7 +22,7 @@ pub fn zstd_and_lz4_logs(name: &str, max_cycles: u64, chunk_bytes: u64) -> (Vec<
         name: format!("{name}-yard"),
         navigator_params: Default::default(),
     };
-    Run::new(long_yard_world(3, 5.0, 4.0, 1.0), settings).observer(&mut recorder).execute().unwrap();
+    Run::new(long_yard_world(3, 5.0, 4.0, 1.0), settings).judged().observer(&mut recorder).execute().unwrap();
     recorder.finish().unwrap();
     let zstd = std::fs::read(&path).unwrap();
     let _ = std::fs::remove_file(&path);
