@@ -157,7 +157,6 @@ mod with {
     use rovernav_executive::messages::topics;
     use rovernav_executive::remote::{
         LinkError, PLATFORM_REPLY, PLATFORM_REQUEST, PlatformLink, PlatformReply, PlatformRequest,
-        PlatformServer,
     };
     use rovernav_executive::{Mission, OperatorLink, Run, RunOptions, RunSettings};
     use rovernav_harness::{build_world, platform_server};
