@@ -4,21 +4,15 @@
 
 use rovernav_executive::judge::{Judge, Judgement};
 use rovernav_executive::platform::Executed;
-use rovernav_executive::{Run, RunError, RunSettings, World};
+use rovernav_executive::{Mission, Run, RunError, RunSettings, World};
 use rovernav_harness::{JudgedRun, Scorer, long_yard_world, optimal_length};
 use rovernav_sim::Simulator;
 use std::sync::{Arc, Mutex};
 
+/// The default mission's settings, dead reckoning, at most 400 commands.
 fn settings() -> RunSettings {
-    RunSettings {
-        navigator: "astar-grid".into(),
-        localizer: "dead-reckoning".into(),
-        seed: 3,
-        time_limit_s: 3600.0,
-        max_cycles: 400,
-        name: "judge-yard".into(),
-        navigator_params: Default::default(),
-    }
+    let default = RunSettings::of(&Mission::default_mission());
+    RunSettings { localizer: "dead-reckoning".into(), max_cycles: 400, name: "judge-yard".into(), ..default }
 }
 
 /// A judge that counts what it is told and leaves the figures to the harness's scorer.
