@@ -5,6 +5,7 @@
 //! (the designated target and its estimates included).
 
 use rovernav_executive::{Mission, Run};
+use rovernav_harness::JudgedRun;
 use rovernav_telemetry::messages::topics;
 use rovernav_telemetry::schema::check;
 use rovernav_telemetry::{TelemetryRecorder, read_log};
