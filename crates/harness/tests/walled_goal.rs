@@ -1,4 +1,4 @@
-//! A goal walled in by a ring of rock (the grid navigators, `crates/navigation/src/grid_nav.rs`):
+//! A goal walled in by a ring of rock (the grid navigators, `crates/navigation/src/grid_nav/`):
 //! the goal counts as reached anywhere within its tolerance, so when the rock's grown margin
 //! closes every way to the goal cell itself the navigator plans to the nearest reachable cell
 //! inside the tolerance instead of declaring the goal unreachable.
