@@ -26,10 +26,7 @@ pub trait JudgedRun<'a>: Sized {
 
 impl<'a> JudgedRun<'a> for Run<'a> {
     fn mission(mission: &Mission, origin: &str) -> Result<Run<'a>, RunError> {
-        let mut world = build_world(mission, origin)?;
-        if let Some(lander) = &mission.lander {
-            world.sensor_model.lander = Some(lander.station(world.start.x, world.start.y));
-        }
+        let world = build_world(mission, origin)?;
         let options = mission_options(mission, &world);
         Ok(Run::new(world, RunSettings::of(mission)).options(options).origin(origin).judged())
     }

@@ -187,6 +187,18 @@ pub fn build_world(mission: &Mission, origin: &str) -> Result<World, WorldError>
     let ground_z = terrain.dem.height(start_xy.x, start_xy.y).unwrap_or(0.0);
     sensor_model.navcam.volumes =
         mission.sky.iter().map(|s| s.volume(start_xy.x, start_xy.y, ground_z)).collect();
+    // The lander station, placed from the start; it must stand on the terrain.
+    if let Some(lander) = &mission.lander {
+        let station = lander.station(start_xy.x, start_xy.y);
+        let [fx, fy] = station.position;
+        if terrain.dem.height(fx, fy).is_none() {
+            return Err(invalid(
+                "lander.distance_m",
+                format!("puts the lander at ({fx:.1}, {fy:.1}) m, off the terrain"),
+            ));
+        }
+        sensor_model.lander = Some(station);
+    }
     Ok(World {
         terrain,
         rover,
@@ -349,5 +361,29 @@ mod tests {
         let clean = (mast_points(&mission, 1), mast_points(&mission, 2));
         assert!(!clean.0.is_empty());
         assert_eq!(clean.0, clean.1);
+    }
+
+    /// A lander placed where the terrain has no height is refused with the field that put it
+    /// there; one on the terrain stands where the mission says, from the start.
+    #[test]
+    fn a_lander_off_the_terrain_is_refused_and_one_on_it_is_placed_from_the_start() {
+        let lander = |d: f64| {
+            let mut m = Mission::default_mission();
+            m.lander = Some(rovernav_executive::mission::LanderSpec {
+                azimuth_deg: 0.0,
+                distance_m: d,
+                mast_height_m: None,
+                max_range_m: None,
+                min_turn_deg: None,
+                image_size: None,
+            });
+            m
+        };
+        let world = build_world(&lander(6.0), "test").unwrap();
+        let station = world.sensor_model.lander.expect("the mission's lander");
+        assert!((station.position[0] - (world.start.x + 6.0)).abs() < 1e-9);
+        assert!((station.position[1] - world.start.y).abs() < 1e-9);
+        let err = build_world(&lander(100.0), "test").unwrap_err().to_string();
+        assert!(err.contains("lander.distance_m") && err.contains("off the terrain"), "{err}");
     }
 }
