@@ -31,8 +31,10 @@ pub fn squared_mahalanobis_2d(ex: f64, ey: f64, s: &[[f64; 2]; 2]) -> Option<f64
 /// The covariance intersection weight of two 2x2 position covariances `p` (the filter's) and
 /// `r` (a fix's) whose errors may be correlated in any way (Julier and Uhlmann, "A
 /// non-divergent estimation algorithm in the presence of unknown correlations", 1997): the
-/// omega in [0.01, 0.99] that minimises the determinant of (omega p^-1 + (1 - omega) r^-1)^-1.
-/// Fusing with `p / omega` and `r / (1 - omega)` as if independent gives that intersection.
+/// omega in [0.01, 1] that minimises the determinant of (omega p^-1 + (1 - omega) r^-1)^-1.
+/// Fusing with `p / omega` and `r / (1 - omega)` as if independent gives that intersection;
+/// omega = 1 means the fix adds nothing (fusing it would only inflate the filter). The grid
+/// stops at 0.01 rather than 0 because `p / omega` must stay finite.
 /// `None` when either matrix is singular.
 pub fn covariance_intersection_weight(p: &[[f64; 2]; 2], r: &[[f64; 2]; 2]) -> Option<f64> {
     let inverse = |m: &[[f64; 2]; 2]| {
@@ -46,7 +48,7 @@ pub fn covariance_intersection_weight(p: &[[f64; 2]; 2], r: &[[f64; 2]; 2]) -> O
         let m = |i: usize, j: usize| w * a[i][j] + (1.0 - w) * b[i][j];
         m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0)
     };
-    (1..=99).map(|k| f64::from(k) / 100.0).max_by(|x, y| information(*x).total_cmp(&information(*y)))
+    (1..=100).map(|k| f64::from(k) / 100.0).max_by(|x, y| information(*x).total_cmp(&information(*y)))
 }
 
 /// The standard normal quantile at `p` in (0, 1) (Abramowitz and Stegun 26.2.23).
@@ -113,7 +115,11 @@ mod tests {
         let w = covariance_intersection_weight(&[[1.0, 0.0], [0.0, 4.0]], &[[4.0, 0.0], [0.0, 1.0]]).unwrap();
         assert!((w - 0.5).abs() < 1e-9, "{w}");
         let tight = [[0.01, 0.0], [0.0, 0.01]];
-        assert_eq!(covariance_intersection_weight(&tight, &[[1.0, 0.0], [0.0, 1.0]]), Some(0.99));
+        assert_eq!(
+            covariance_intersection_weight(&tight, &[[1.0, 0.0], [0.0, 1.0]]),
+            Some(1.0),
+            "a fix far wider than the filter adds nothing"
+        );
         assert!(covariance_intersection_weight(&tight, &[[0.0; 2]; 2]).is_none());
     }
 

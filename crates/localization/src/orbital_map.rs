@@ -13,7 +13,7 @@
 //! position innovation fails the chi-square gate `gate` against the filter's and the fix's
 //! covariances; a rejected fix is retried `retry_interval_m` later, at most `max_retries`
 //! times before the next interval. A fused fix moves the
-//! rover's map with the estimate (`EkfMl::fuse_absolute_fix`).
+//! rover's map with the estimate (`EkfMl::fuse_correlated_fix`).
 //!
 //! In the `fix_lead_m` before a fix is due, the localiser offers the look-back decorator
 //! sideways localisation targets (pans of +-45 to +-135 deg, in turn), so that the map to match
@@ -89,9 +89,6 @@ pub struct OrbitalMapParams {
     pub covariance_scale: f64,
     /// Chi-square gate (2 degrees of freedom) on the position innovation.
     pub gate: f64,
-    /// Fuse each orbital fix by covariance intersection (its error is correlated with the
-    /// filter's, see the module doc) rather than as an independent measurement.
-    pub covariance_intersection: bool,
 }
 
 impl Default for OrbitalMapParams {
@@ -120,7 +117,6 @@ impl Default for OrbitalMapParams {
             covariance_scale: 0.2,
             // 99.9 % of a chi-square with 2 degrees of freedom.
             gate: 13.8,
-            covariance_intersection: true,
         }
     }
 }
@@ -277,14 +273,9 @@ impl OrbitalMapLocalizer {
             || (m.pose.y - here.y).abs() > window.half_y - edge;
         let uncertain = m.failure_probability > p.max_failure_probability;
         let gated = innovation_nees(&before, &fix).is_none_or(|d| d > p.gate);
-        let fuse = |inner: &mut EkfMl| {
-            if p.covariance_intersection {
-                inner.fuse_correlated_fix(&fix)
-            } else {
-                inner.fuse_absolute_fix(&fix)
-            }
-        };
-        let used = !uncertain && !on_edge && !gated && fuse(&mut self.inner);
+        // Each orbital fix is fused by covariance intersection: its error is correlated with
+        // the filter's (see the module doc).
+        let used = !uncertain && !on_edge && !gated && self.inner.fuse_correlated_fix(&fix);
         self.fixes.push(OrbitalFix { before, fix, used, at_update: self.updates });
         if used {
             self.stats.used += 1;

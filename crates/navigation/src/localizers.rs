@@ -153,12 +153,6 @@ pub fn orbital_map_params() -> Vec<Param<OrbitalMapParams>> {
             unit: Unit::Weight,
             field: |c| Field::Real(&mut c.covariance_scale),
         },
-        Param {
-            name: "covariance_intersection",
-            doc: "fuse orbital fixes by covariance intersection (correlated with the filter); off: as independent",
-            unit: Unit::Switch,
-            field: |c| Field::Bool(&mut c.covariance_intersection),
-        },
     ]
 }
 

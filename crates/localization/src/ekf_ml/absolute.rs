@@ -81,8 +81,12 @@ impl EkfMl {
     /// Fuses an absolute fix whose error may be correlated with the filter's by covariance
     /// intersection ([`crate::consistency::covariance_intersection_weight`]): the filter's
     /// position covariance is inflated by 1 / omega and the fix's by 1 / (1 - omega) before an
-    /// ordinary update, so that the posterior is consistent whatever the correlation. Returns
-    /// whether the fix was fused (on a refusal the filter is left as it was).
+    /// ordinary update, so that the posterior is consistent whatever the correlation. A fix the
+    /// intersection gives no weight (omega = 1) is accepted and leaves the filter as it was.
+    /// Departure from full-state covariance intersection (which inflates the whole state): only
+    /// the position rows and columns are inflated, since the fix measures position only and
+    /// heading and gyro bias are not correlated with it through the map. Returns whether the
+    /// fix was accepted (on a refusal the filter is left as it was).
     pub fn fuse_correlated_fix(&mut self, fix: &MatchResult) -> bool {
         let p = self.ekf.estimate().covariance;
         let block = |c: &[[f64; 3]; 3]| [[c[0][0], c[0][1]], [c[1][0], c[1][1]]];
@@ -90,6 +94,10 @@ impl EkfMl {
         else {
             return false;
         };
+        if w >= 1.0 {
+            // The intersection is the filter's own estimate: the fix agrees and adds nothing.
+            return true;
+        }
         let mut inflated = *fix;
         for row in inflated.covariance.iter_mut().take(2) {
             for v in row.iter_mut().take(2) {
