@@ -68,9 +68,11 @@ pub(super) struct LastNavcam {
     pub(super) frame_seq: u64,
 }
 
-/// The left and right Navcam images of a frame, as the tracker's images, with pan and tilt.
+/// The left and right Navcam images of a frame, as the tracker's images, with pan and tilt: the
+/// frame's last pair (a ride-along pair comes after the images of the navigator's own sensing,
+/// which with stereo ranging include a Navcam left image of its own).
 pub(super) fn pair_of(images: &[ImageMsg]) -> Option<(GreyF32, GreyF32, f64, f64)> {
-    let get = |name: &str| images.iter().find(|i| i.camera == name);
+    let get = |name: &str| images.iter().rfind(|i| i.camera == name);
     let (l, r) = (get("navcam_left")?, get("navcam_right")?);
     Some((grey_f32(l.width, l.height, &l.pixels)?, grey_f32(r.width, r.height, &r.pixels)?, l.pan, l.tilt))
 }
