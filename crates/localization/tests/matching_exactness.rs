@@ -299,6 +299,11 @@ proptest::proptest! {
         let full_bb = matcher.match_detailed(&local, &window, false).expect("match");
         let full_ex = matcher.match_detailed(&local, &window, true).expect("match");
         proptest::prop_assert_eq!(full_bb.result.log_likelihood, full_ex.result.log_likelihood);
-        proptest::prop_assert_eq!(full_bb.result.failure_probability, full_ex.result.failure_probability);
+        // The failure search starts from the optimum's pose: when two poses tie for the optimum
+        // (equal log-likelihoods, asserted above) the two matches may start from different ones,
+        // each a correct optimum, so the failure search is compared when they found the same pose.
+        if full_bb.best_index == full_ex.best_index {
+            proptest::prop_assert_eq!(full_bb.result.failure_probability, full_ex.result.failure_probability);
+        }
     }
 }
