@@ -469,17 +469,7 @@ impl Simulator {
     /// Takes a stereo pair's pictures: no range, not a sensing action.
     fn take_pictures(&mut self, pair: navcam::Pair, frame: &mut SensorFrame) {
         let seed: u64 = self.image_rng.random();
-        let images = navcam::capture_pair(
-            &self.terrain,
-            &self.field,
-            &self.rover,
-            &self.truth,
-            &self.model.stereo,
-            &self.model.navcam,
-            pair,
-            self.time,
-            seed,
-        );
+        let images = self.pictures_alongside(pair, seed);
         let taken = images.len() as u32;
         frame.images.extend(images);
         let dt = self.model.navcam.capture_time_s.max(0.0);
